@@ -1,0 +1,11 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace colorfree::app {
+
+// Each command adds its subcommand to `app`; its callback sets `exit_code` (0 success, 1 an
+// expectation not met) and throws colorfree::Error on bad input (exit 2). main.cpp lists them in
+// the order --help shows them.
+
+}  // namespace colorfree::app

@@ -1,0 +1,189 @@
+#include "colorfree/perception/camera_model.h"
+
+#include <cmath>
+#include <fstream>
+#include <yaml-cpp/yaml.h>
+
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/param_file.h"
+
+namespace colorfree {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kMinDirectionZ = 1e-9;
+}  // namespace
+
+CameraIntrinsics CameraIntrinsics::fromHorizontalFov(int width_px, int height_px,
+                                                     double fov_horizontal_rad) {
+  CameraIntrinsics k;
+  k.width_px = width_px;
+  k.height_px = height_px;
+  k.focal_x_px = (width_px / 2.0) / std::tan(fov_horizontal_rad / 2);
+  k.focal_y_px = k.focal_x_px;
+  k.center_x_px = width_px / 2.0;
+  k.center_y_px = height_px / 2.0;
+  return k;
+}
+
+double CameraIntrinsics::horizontalFov() const { return 2 * std::atan(width_px / 2.0 / focal_x_px); }
+double CameraIntrinsics::verticalFov() const { return 2 * std::atan(height_px / 2.0 / focal_y_px); }
+
+Eigen::Matrix3d opticalToBody() {
+  Eigen::Matrix3d r;
+  // Columns: the optical x, y, z axes expressed in the body frame.
+  r << 0, 0, 1,  //
+      -1, 0, 0,  //
+      0, -1, 0;
+  return r;
+}
+
+Eigen::Isometry3d cameraToRobotFromPose(const CameraPose& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d(p.x_m, p.y_m, p.height_m);
+  t.linear() = (Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(p.pitch_rad, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(p.roll_rad, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix() *
+               opticalToBody();
+  return t;
+}
+
+CameraModel::CameraModel(const CameraIntrinsics& intrinsics,
+                         const Eigen::Isometry3d& camera_to_robot)
+    : intrinsics_(intrinsics), camera_to_robot_(camera_to_robot) {
+  validate("camera model");
+  robot_to_camera_ = camera_to_robot_.inverse();
+}
+
+CameraModel::CameraModel(const CameraIntrinsics& intrinsics, const CameraPose& pose)
+    : CameraModel(intrinsics, cameraToRobotFromPose(pose)) {}
+
+void CameraModel::validate(const std::string& origin) const {
+  const auto& k = intrinsics_;
+  if (k.width_px <= 0 || k.height_px <= 0 || k.width_px > 8192 || k.height_px > 8192) {
+    throw Error(origin + ": image size " + std::to_string(k.width_px) + "x" +
+                std::to_string(k.height_px) + " is impossible");
+  }
+  for (double v : {k.focal_x_px, k.focal_y_px}) {
+    if (!std::isfinite(v) || v <= 0) throw Error(origin + ": focal length must be positive");
+  }
+  for (double v : {k.center_x_px, k.center_y_px}) {
+    if (!std::isfinite(v)) throw Error(origin + ": principal point is not a number");
+  }
+  if (!camera_to_robot_.matrix().allFinite()) throw Error(origin + ": camera pose is not finite");
+  if (camera_to_robot_.translation().z() <= 0) {
+    throw Error(origin + ": camera is at or below the ground (height " +
+                std::to_string(camera_to_robot_.translation().z()) + " m)");
+  }
+}
+
+CameraModel CameraModel::load(const std::string& path) {
+  ParamFile f(path);
+  CameraIntrinsics k;
+  k.width_px = f.get<int>("width_px");
+  k.height_px = f.get<int>("height_px");
+  k.focal_x_px = f.get<double>("focal_x_px");
+  k.focal_y_px = f.get<double>("focal_y_px");
+  k.center_x_px = f.get<double>("center_x_px");
+  k.center_y_px = f.get<double>("center_y_px");
+  CameraPose p;
+  p.x_m = f.getInRange("x_m", -10, 10);
+  p.y_m = f.getInRange("y_m", -10, 10);
+  p.height_m = f.get<double>("height_m");
+  p.roll_rad = f.getInRange("roll_deg", -180, 180) * kPi / 180;
+  p.pitch_rad = f.getInRange("pitch_deg", -90, 90) * kPi / 180;
+  p.yaw_rad = f.getInRange("yaw_deg", -180, 180) * kPi / 180;
+  f.finish();
+  CameraModel m;
+  m.intrinsics_ = k;
+  m.camera_to_robot_ = cameraToRobotFromPose(p);
+  m.validate(path);
+  m.robot_to_camera_ = m.camera_to_robot_.inverse();
+  return m;
+}
+
+void CameraModel::save(const std::string& path) const {
+  // Recover yaw, pitch, roll from R = Rz(yaw) Ry(pitch) Rx(roll) opticalToBody().
+  const Eigen::Matrix3d r = camera_to_robot_.linear() * opticalToBody().transpose();
+  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  const double yaw = std::atan2(r(1, 0), r(0, 0));
+  const double roll = std::atan2(r(2, 1), r(2, 2));
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << YAML::BeginMap;
+  out << YAML::Key << "width_px" << YAML::Value << intrinsics_.width_px;
+  out << YAML::Key << "height_px" << YAML::Value << intrinsics_.height_px;
+  out << YAML::Key << "focal_x_px" << YAML::Value << intrinsics_.focal_x_px;
+  out << YAML::Key << "focal_y_px" << YAML::Value << intrinsics_.focal_y_px;
+  out << YAML::Key << "center_x_px" << YAML::Value << intrinsics_.center_x_px;
+  out << YAML::Key << "center_y_px" << YAML::Value << intrinsics_.center_y_px;
+  out << YAML::Key << "x_m" << YAML::Value << camera_to_robot_.translation().x();
+  out << YAML::Key << "y_m" << YAML::Value << camera_to_robot_.translation().y();
+  out << YAML::Key << "height_m" << YAML::Value << camera_to_robot_.translation().z();
+  out << YAML::Key << "roll_deg" << YAML::Value << roll * 180 / kPi;
+  out << YAML::Key << "pitch_deg" << YAML::Value << pitch * 180 / kPi;
+  out << YAML::Key << "yaw_deg" << YAML::Value << yaw * 180 / kPi;
+  out << YAML::EndMap;
+  std::ofstream file(path);
+  file << out.c_str() << "\n";
+  if (!file) throw Error(path + ": cannot write camera file");
+}
+
+Eigen::Vector3d CameraModel::pixelRay(const Eigen::Vector2d& pixel) const {
+  const auto& k = intrinsics_;
+  const Eigen::Vector3d d_cam((pixel.x() - k.center_x_px) / k.focal_x_px,
+                              (pixel.y() - k.center_y_px) / k.focal_y_px, 1.0);
+  return (camera_to_robot_.linear() * d_cam).normalized();
+}
+
+std::optional<Eigen::Vector2d> CameraModel::pixelToGround(const Eigen::Vector2d& pixel,
+                                                          double height_m) const {
+  const Eigen::Vector3d d = pixelRay(pixel);
+  const Eigen::Vector3d o = camera_to_robot_.translation();
+  const double dz = height_m - o.z();
+  // The ray must head towards the plane.
+  if (d.z() * dz <= kMinDirectionZ * std::abs(dz)) return std::nullopt;
+  const double t = dz / d.z();
+  const Eigen::Vector3d p = o + t * d;
+  return Eigen::Vector2d(p.x(), p.y());
+}
+
+std::optional<Eigen::Vector2d> CameraModel::robotToPixel(const Eigen::Vector3d& point) const {
+  const Eigen::Vector3d c = robot_to_camera_ * point;
+  if (c.z() <= 1e-9) return std::nullopt;
+  const auto& k = intrinsics_;
+  return Eigen::Vector2d(k.center_x_px + k.focal_x_px * c.x() / c.z(),
+                         k.center_y_px + k.focal_y_px * c.y() / c.z());
+}
+
+std::optional<double> CameraModel::horizonY(double x) const {
+  // A pixel is on the horizon when its ray is level: row 2 of R times the optical direction is 0.
+  const Eigen::Matrix3d& r = camera_to_robot_.linear();
+  const auto& k = intrinsics_;
+  const double a = r(2, 0) / k.focal_x_px;
+  const double b = r(2, 1) / k.focal_y_px;
+  if (std::abs(b) < 1e-12) return std::nullopt;
+  return k.center_y_px - (r(2, 2) + a * (x - k.center_x_px)) / b;
+}
+
+std::optional<double> CameraModel::ballRadiusPx(const Eigen::Vector2d& pixel,
+                                                double ball_radius_m) const {
+  const auto centre = pixelToGround(pixel, ball_radius_m);
+  if (!centre) return std::nullopt;
+  const Eigen::Vector3d c(centre->x(), centre->y(), ball_radius_m);
+  const double dist = (c - position()).norm();
+  if (dist <= ball_radius_m) return std::nullopt;
+  return intrinsics_.focal_y_px * std::tan(std::asin(ball_radius_m / dist));
+}
+
+std::optional<double> CameraModel::robotHeightPx(const Eigen::Vector2d& feet_pixel,
+                                                 double robot_height_m) const {
+  const auto feet = pixelToGround(feet_pixel);
+  if (!feet) return std::nullopt;
+  const auto top = robotToPixel(Eigen::Vector3d(feet->x(), feet->y(), robot_height_m));
+  if (!top) return std::nullopt;
+  return (feet_pixel - *top).norm();
+}
+
+}  // namespace colorfree

@@ -1,0 +1,165 @@
+#include "colorfree/perception/camera_model.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "colorfree/perception/error.h"
+#include "test_support.h"
+
+namespace colorfree {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+CameraModel naoTopCamera(double pitch_deg = 20, double yaw_deg = 0, double roll_deg = 0) {
+  CameraPose pose;
+  pose.x_m = 0.05;
+  pose.height_m = 0.51;
+  pose.pitch_rad = pitch_deg * kPi / 180;
+  pose.yaw_rad = yaw_deg * kPi / 180;
+  pose.roll_rad = roll_deg * kPi / 180;
+  return CameraModel(CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * kPi / 180), pose);
+}
+
+TEST(CameraModel, PrincipalRayPointsForwardAndDown) {
+  const CameraModel cam = naoTopCamera(30);
+  const Eigen::Vector3d ray = cam.pixelRay({320, 240});
+  EXPECT_NEAR(ray.x(), std::cos(30 * kPi / 180), 1e-12);
+  EXPECT_NEAR(ray.y(), 0, 1e-12);
+  EXPECT_NEAR(ray.z(), -std::sin(30 * kPi / 180), 1e-12);
+}
+
+TEST(CameraModel, ImageRightIsRobotRight) {
+  const CameraModel cam = naoTopCamera(30);
+  const auto left = cam.pixelToGround({100, 400});
+  const auto right = cam.pixelToGround({540, 400});
+  ASSERT_TRUE(left && right);
+  EXPECT_GT(left->y(), 0);   // robot y points left
+  EXPECT_LT(right->y(), 0);
+}
+
+class CameraRoundTrip : public ::testing::TestWithParam<std::tuple<double, double, double>> {};
+
+TEST_P(CameraRoundTrip, PixelToGroundToPixel) {
+  const auto [pitch, yaw, roll] = GetParam();
+  const CameraModel cam = naoTopCamera(pitch, yaw, roll);
+  int checked = 0;
+  for (double y = 0.5; y < 480; y += 37) {
+    for (double x = 0.5; x < 640; x += 41) {
+      const auto ground = cam.pixelToGround({x, y});
+      if (!ground) continue;
+      const auto back = cam.robotToPixel({ground->x(), ground->y(), 0});
+      ASSERT_TRUE(back);
+      EXPECT_NEAR(back->x(), x, 1e-6);
+      EXPECT_NEAR(back->y(), y, 1e-6);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 20);
+}
+
+INSTANTIATE_TEST_SUITE_P(Poses, CameraRoundTrip,
+                         ::testing::Values(std::make_tuple(20.0, 0.0, 0.0),
+                                           std::make_tuple(45.0, 30.0, 0.0),
+                                           std::make_tuple(5.0, -60.0, 4.0),
+                                           std::make_tuple(70.0, 10.0, -8.0)));
+
+TEST(CameraModel, HorizonSeparatesGroundFromSky) {
+  const CameraModel cam = naoTopCamera(10, 0, 5);
+  for (double x : {0.5, 320.0, 639.5}) {
+    const auto h = cam.horizonY(x);
+    ASSERT_TRUE(h);
+    EXPECT_FALSE(cam.pixelToGround({x, *h - 0.5}));
+    EXPECT_TRUE(cam.pixelToGround({x, *h + 0.5}));
+  }
+}
+
+TEST(CameraModel, LevelCameraHorizonThroughCentre) {
+  const CameraModel cam = naoTopCamera(0);
+  EXPECT_NEAR(*cam.horizonY(320), 240, 1e-9);
+  EXPECT_NEAR(*cam.horizonY(0), 240, 1e-9);
+}
+
+TEST(CameraModel, BallRadiusMatchesProjectedBall) {
+  const CameraModel cam = naoTopCamera(25);
+  const double r = 0.05;
+  // A ball 2 m ahead: the projected top and bottom rim points span about two radii.
+  const Eigen::Vector3d centre(2.0, 0, r);
+  const auto c_px = cam.robotToPixel(centre);
+  ASSERT_TRUE(c_px);
+  const auto radius = cam.ballRadiusPx(*c_px, r);
+  ASSERT_TRUE(radius);
+  const double dist = (centre - cam.position()).norm();
+  EXPECT_NEAR(*radius, cam.intrinsics().focal_y_px * r / dist, 0.05);
+  const double horizon = *cam.horizonY(320);
+  EXPECT_FALSE(cam.ballRadiusPx({320, horizon - 5}, r)) << "above the horizon there is no ground";
+}
+
+TEST(CameraModel, RobotHeightShrinksWithDistance) {
+  const CameraModel cam = naoTopCamera(15);
+  const auto near_feet = cam.robotToPixel({1.0, 0, 0});
+  const auto far_feet = cam.robotToPixel({3.0, 0, 0});
+  ASSERT_TRUE(near_feet && far_feet);
+  const double near_h = *cam.robotHeightPx(*near_feet, 0.574);
+  const double far_h = *cam.robotHeightPx(*far_feet, 0.574);
+  EXPECT_GT(near_h, 2.5 * far_h);
+  EXPECT_LT(near_h, 3.5 * far_h);
+}
+
+TEST(CameraModel, RejectsImpossibleValues) {
+  CameraIntrinsics k = CameraIntrinsics::fromHorizontalFov(640, 480, 1.0);
+  CameraPose pose;
+  pose.height_m = -0.1;
+  EXPECT_THROW(CameraModel(k, pose), Error);
+  pose.height_m = 0.5;
+  k.focal_x_px = 0;
+  EXPECT_THROW(CameraModel(k, pose), Error);
+  k.focal_x_px = std::nan("");
+  EXPECT_THROW(CameraModel(k, pose), Error);
+  k = CameraIntrinsics::fromHorizontalFov(0, 480, 1.0);
+  EXPECT_THROW(CameraModel(k, pose), Error);
+}
+
+TEST(CameraModel, FileRoundTrip) {
+  const CameraModel cam = naoTopCamera(22, -35, 3);
+  const std::string path = ::testing::TempDir() + "/camera_round_trip.yaml";
+  cam.save(path);
+  const CameraModel back = CameraModel::load(path);
+  EXPECT_TRUE(back.cameraToRobot().isApprox(cam.cameraToRobot(), 1e-9));
+  EXPECT_DOUBLE_EQ(back.intrinsics().focal_x_px, cam.intrinsics().focal_x_px);
+  std::filesystem::remove(path);
+}
+
+TEST(CameraModel, FileErrorsNameFileAndKey) {
+  const std::string path = ::testing::TempDir() + "/camera_bad.yaml";
+  {
+    std::ofstream f(path);
+    f << "width_px: 640\nheight_px: 480\nfocal_x_px: 0\nfocal_y_px: 500\ncenter_x_px: 320\n"
+         "center_y_px: 240\nx_m: 0\ny_m: 0\nheight_m: 0.5\nroll_deg: 0\npitch_deg: 10\nyaw_deg: 0\n";
+  }
+  try {
+    CameraModel::load(path);
+    FAIL() << "zero focal length accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("focal"), std::string::npos);
+  }
+  {
+    std::ofstream f(path);
+    f << "width_px: 640\n";
+  }
+  try {
+    CameraModel::load(path);
+    FAIL() << "missing keys accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("height_px"), std::string::npos);
+  }
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace colorfree
