@@ -1,0 +1,89 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace colorfree {
+
+/// A box in the image, pixels, x right, y down; (x0, y0) top-left corner, (x1, y1) bottom-right.
+struct PixelBox {
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  double width() const { return x1 - x0; }
+  double height() const { return y1 - y0; }
+  Eigen::Vector2d centre() const { return {(x0 + x1) / 2, (y0 + y1) / 2}; }
+};
+
+/// A ball candidate from the proposal stage.
+struct BallProposal {
+  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+  double radius_px = 0;
+  double response = 0;  ///< proposal strength, larger is stronger
+};
+
+/// A detected ball.
+struct BallPercept {
+  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+  double radius_px = 0;
+  double confidence = 0;                          ///< classifier output in [0, 1]
+  std::optional<Eigen::Vector2d> position_in_robot;  ///< ball centre on the ground, robot frame
+};
+
+/// A robot candidate from the proposal stage.
+struct RobotProposal {
+  PixelBox box;
+  Eigen::Vector2d feet_px = Eigen::Vector2d::Zero();  ///< the robot's ground point in the image
+};
+
+/// Which side of a robot a region shows, as OriNet classifies it.
+enum class RobotSide { kFront, kBack, kSide };
+
+/// Orientation of a detected robot relative to the observer's robot frame.
+struct RobotOrientation {
+  double angle_rad = 0;     ///< facing direction in the observer's robot frame, (-π, π]
+  bool facing_known = false;  ///< true: perceived; false: only the axis (semi-perceived)
+};
+
+/// A detected robot.
+struct RobotPercept {
+  PixelBox box;
+  Eigen::Vector2d feet_px = Eigen::Vector2d::Zero();
+  double confidence = 0;
+  std::optional<Eigen::Vector2d> position_in_robot;  ///< ground point, robot frame
+  std::optional<RobotOrientation> orientation_raw;       ///< this frame's estimate
+  std::optional<RobotOrientation> orientation_filtered;  ///< after the circular median filter
+  int track_id = -1;  ///< association over frames, -1 when not tracked
+};
+
+/// A field line segment.
+struct LinePercept {
+  Eigen::Vector2d start_px = Eigen::Vector2d::Zero(), end_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d start_in_robot = Eigen::Vector2d::Zero(), end_in_robot = Eigen::Vector2d::Zero();
+};
+
+enum class IntersectionType { kL, kT, kX };
+
+struct IntersectionPercept {
+  IntersectionType type = IntersectionType::kL;
+  Eigen::Vector2d position_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d position_in_robot = Eigen::Vector2d::Zero();
+  /// For L and T: the direction of the stem/arms in the robot frame, unit vectors.
+  Eigen::Vector2d direction1_in_robot = Eigen::Vector2d::UnitX();
+  Eigen::Vector2d direction2_in_robot = Eigen::Vector2d::UnitY();
+};
+
+struct CircleMarkPercept {
+  Eigen::Vector2d centre_in_robot = Eigen::Vector2d::Zero();
+  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+};
+
+/// Field lines and features of one frame.
+struct FieldFeatures {
+  std::vector<LinePercept> lines;
+  std::vector<IntersectionPercept> intersections;
+  std::optional<CircleMarkPercept> centre_circle;
+  std::vector<CircleMarkPercept> penalty_marks;
+};
+
+}  // namespace colorfree
