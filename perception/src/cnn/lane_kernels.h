@@ -1,0 +1,195 @@
+#pragma once
+
+// The kernels of the engine and the trainer. Activations are stored "batch in lanes":
+// element (y, x, c) of sample b lives at [((y * W + x) * C + c) * kLanes + b], so every
+// operation is one vector operation over kLanes samples whatever the layer's shape, and the
+// compiler maps a Vec to one AVX-512 register, two AVX registers or four SSE registers.
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "colorfree/perception/cnn/net.h"
+
+namespace colorfree::cnn::detail {
+
+inline constexpr int kLanes = 16;
+typedef float Vec __attribute__((vector_size(kLanes * sizeof(float))));
+
+#if defined(__AVX512F__)
+inline constexpr int kBlock = 8;  // output channels per register block (32 vector registers)
+#elif defined(__AVX__)
+inline constexpr int kBlock = 4;  // 16 ymm registers, a Vec takes two
+#else
+inline constexpr int kBlock = 2;  // 16 xmm registers, a Vec takes four
+#endif
+
+inline Vec splat(float v) {
+  Vec r;
+  for (int i = 0; i < kLanes; ++i) r[i] = v;
+  return r;
+}
+
+inline Vec activate(Vec v, Activation a) {
+  if (a == Activation::kLeaky) return v > 0.0f ? v : v * kLeakySlope;
+  return v;
+}
+
+/// Weights reordered for the loops: convolution [o][ky][kx][c]; connected [o][y][x][c].
+void packWeights(const Layer& l, const float* params, float* packed);
+
+// ---- forward ----------------------------------------------------------------------------------
+
+template <int NB>
+inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
+                      Vec* out) {
+  const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
+  const int K = l.size, S = l.stride, P = l.pad, O = l.out.channels;
+  const int ws = K * K * C;
+  const float* wo = w + static_cast<std::size_t>(o0) * ws;
+  for (int oy = 0; oy < l.out.height; ++oy) {
+    const int iy0 = oy * S - P;
+    const int ky0 = std::max(0, -iy0), ky1 = std::min(K, Hin - iy0);
+    for (int ox = 0; ox < l.out.width; ++ox) {
+      const int ix0 = ox * S - P;
+      const int kx0 = std::max(0, -ix0), kx1 = std::min(K, Win - ix0);
+      Vec acc[NB];
+      for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
+      for (int ky = ky0; ky < ky1; ++ky) {
+        for (int kx = kx0; kx < kx1; ++kx) {
+          const Vec* px = in + (static_cast<std::size_t>(iy0 + ky) * Win + (ix0 + kx)) * C;
+          const float* wk = wo + (ky * K + kx) * C;
+          for (int c = 0; c < C; ++c) {
+            const Vec v = px[c];
+            for (int j = 0; j < NB; ++j) acc[j] += wk[j * ws + c] * v;
+          }
+        }
+      }
+      Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * O + o0;
+      for (int j = 0; j < NB; ++j) po[j] = activate(acc[j], l.activation);
+    }
+  }
+}
+
+template <int NB>
+inline void connectedBlock(const Layer& l, const float* w, const float* bias, int o0,
+                           const Vec* in, Vec* out) {
+  const int n = l.in.size();
+  Vec acc[NB];
+  for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
+  const float* wo = w + static_cast<std::size_t>(o0) * n;
+  for (int i = 0; i < n; ++i) {
+    const Vec v = in[i];
+    for (int j = 0; j < NB; ++j) acc[j] += wo[j * n + i] * v;
+  }
+  for (int j = 0; j < NB; ++j) out[o0 + j] = activate(acc[j], l.activation);
+}
+
+template <template <int> class F, typename... Args>
+inline void forBlocks(int count, Args&&... args) {
+  int o = 0;
+  for (; o + kBlock <= count; o += kBlock) F<kBlock>::run(o, args...);
+  switch (count - o) {
+    case 0: break;
+#if defined(__AVX512F__)
+    case 7: F<7>::run(o, args...); break;
+    case 6: F<6>::run(o, args...); break;
+    case 5: F<5>::run(o, args...); break;
+    case 4: F<4>::run(o, args...); break;
+#endif
+#if defined(__AVX__)
+    case 3: F<3>::run(o, args...); break;
+    case 2: F<2>::run(o, args...); break;
+#endif
+    default:
+      for (; o < count; ++o) F<1>::run(o, args...);
+  }
+}
+
+template <int NB>
+struct ConvRun {
+  static void run(int o, const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
+    convBlock<NB>(l, w, b, o, in, out);
+  }
+};
+template <int NB>
+struct ConnectedRun {
+  static void run(int o, const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
+    connectedBlock<NB>(l, w, b, o, in, out);
+  }
+};
+
+inline void convForward(const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
+  forBlocks<ConvRun>(l.out.channels, l, w, b, in, out);
+}
+
+inline void connectedForward(const Layer& l, const float* w, const float* b, const Vec* in,
+                             Vec* out) {
+  forBlocks<ConnectedRun>(l.out.channels, l, w, b, in, out);
+}
+
+// Darknet's max pool: windows start at -padding/2; values outside the input are ignored.
+inline void maxPoolForward(const Layer& l, const Vec* in, Vec* out) {
+  const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
+  const int off = -l.pad / 2;
+  for (int oy = 0; oy < l.out.height; ++oy) {
+    const int iy0 = oy * l.stride + off;
+    const int y0 = std::max(0, iy0), y1 = std::min(Hin, iy0 + l.size);
+    for (int ox = 0; ox < l.out.width; ++ox) {
+      const int ix0 = ox * l.stride + off;
+      const int x0 = std::max(0, ix0), x1 = std::min(Win, ix0 + l.size);
+      Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * C;
+      for (int c = 0; c < C; ++c) po[c] = splat(-std::numeric_limits<float>::infinity());
+      for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; ++x) {
+          const Vec* pi = in + (static_cast<std::size_t>(y) * Win + x) * C;
+          for (int c = 0; c < C; ++c) po[c] = pi[c] > po[c] ? pi[c] : po[c];
+        }
+      }
+    }
+  }
+}
+
+inline void globalAvgPoolForward(const Layer& l, const Vec* in, Vec* out) {
+  const int C = l.in.channels, n = l.in.height * l.in.width;
+  for (int c = 0; c < C; ++c) out[c] = splat(0.0f);
+  for (int p = 0; p < n; ++p) {
+    for (int c = 0; c < C; ++c) out[c] += in[static_cast<std::size_t>(p) * C + c];
+  }
+  const float scale = 1.0f / static_cast<float>(n);
+  for (int c = 0; c < C; ++c) out[c] *= scale;
+}
+
+inline void softmaxForward(const Layer& l, const Vec* in, Vec* out) {
+  const int C = l.in.channels;
+  for (int b = 0; b < kLanes; ++b) {
+    float m = in[0][b];
+    for (int c = 1; c < C; ++c) m = std::max(m, in[c][b]);
+    float sum = 0.0f;
+    for (int c = 0; c < C; ++c) {
+      const float e = std::exp(in[c][b] - m);
+      out[c][b] = e;
+      sum += e;
+    }
+    const float inv = 1.0f / sum;
+    for (int c = 0; c < C; ++c) out[c][b] *= inv;
+  }
+}
+
+/// Copies the routed layers' channels side by side. `sources[k]` is the output of inputs[k].
+inline void routeForward(const Layer& l, const std::vector<const Vec*>& sources,
+                         const std::vector<int>& source_channels, Vec* out) {
+  const int n = l.out.height * l.out.width, C = l.out.channels;
+  for (int p = 0; p < n; ++p) {
+    Vec* po = out + static_cast<std::size_t>(p) * C;
+    for (std::size_t k = 0; k < sources.size(); ++k) {
+      const int ck = source_channels[k];
+      std::memcpy(static_cast<void*>(po), sources[k] + static_cast<std::size_t>(p) * ck,
+                  sizeof(Vec) * ck);
+      po += ck;
+    }
+  }
+}
+
+}  // namespace colorfree::cnn::detail
