@@ -26,9 +26,8 @@ inline constexpr int kBlock = 2;  // 16 xmm registers, a Vec takes four
 #endif
 
 inline Vec splat(float v) {
-  Vec r;
-  for (int i = 0; i < kLanes; ++i) r[i] = v;
-  return r;
+  const Vec zero = {};
+  return zero + v;
 }
 
 inline Vec activate(Vec v, Activation a) {
@@ -41,13 +40,15 @@ void packWeights(const Layer& l, const float* params, float* packed);
 
 // ---- forward ----------------------------------------------------------------------------------
 
+// Packed weights come in blocks of kBlock output channels (the last block may be smaller), the
+// channels of a block interleaved innermost: convolution [block][ky][kx][c][j], connected
+// [block][i][j], so one pointer walks all weights a register block needs.
 template <int NB>
 inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
                       Vec* out) {
   const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
   const int K = l.size, S = l.stride, P = l.pad, O = l.out.channels;
-  const int ws = K * K * C;
-  const float* wo = w + static_cast<std::size_t>(o0) * ws;
+  const float* wb = w + static_cast<std::size_t>(o0) * K * K * C;
   for (int oy = 0; oy < l.out.height; ++oy) {
     const int iy0 = oy * S - P;
     const int ky0 = std::max(0, -iy0), ky1 = std::min(K, Hin - iy0);
@@ -57,12 +58,14 @@ inline void convBlock(const Layer& l, const float* w, const float* bias, int o0,
       Vec acc[NB];
       for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
       for (int ky = ky0; ky < ky1; ++ky) {
+        const Vec* row = in + (static_cast<std::size_t>(iy0 + ky) * Win + ix0) * C;
+        const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB;
         for (int kx = kx0; kx < kx1; ++kx) {
-          const Vec* px = in + (static_cast<std::size_t>(iy0 + ky) * Win + (ix0 + kx)) * C;
-          const float* wk = wo + (ky * K + kx) * C;
+          const Vec* px = row + kx * C;
+          const float* wk = wrow + kx * C * NB;
           for (int c = 0; c < C; ++c) {
             const Vec v = px[c];
-            for (int j = 0; j < NB; ++j) acc[j] += wk[j * ws + c] * v;
+            for (int j = 0; j < NB; ++j) acc[j] += wk[c * NB + j] * v;
           }
         }
       }
@@ -78,33 +81,28 @@ inline void connectedBlock(const Layer& l, const float* w, const float* bias, in
   const int n = l.in.size();
   Vec acc[NB];
   for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
-  const float* wo = w + static_cast<std::size_t>(o0) * n;
+  const float* wb = w + static_cast<std::size_t>(o0) * n;
   for (int i = 0; i < n; ++i) {
     const Vec v = in[i];
-    for (int j = 0; j < NB; ++j) acc[j] += wo[j * n + i] * v;
+    for (int j = 0; j < NB; ++j) acc[j] += wb[i * NB + j] * v;
   }
   for (int j = 0; j < NB; ++j) out[o0 + j] = activate(acc[j], l.activation);
+}
+
+// Calls F<kBlock> on each full block of output channels and F<rest> once on the last block.
+template <template <int> class F, int NB = kBlock, typename... Args>
+inline void lastBlock(int rest, int o, Args&&... args) {
+  if constexpr (NB > 0) {
+    if (rest == NB) return F<NB>::run(o, args...);
+    lastBlock<F, NB - 1>(rest, o, args...);
+  }
 }
 
 template <template <int> class F, typename... Args>
 inline void forBlocks(int count, Args&&... args) {
   int o = 0;
   for (; o + kBlock <= count; o += kBlock) F<kBlock>::run(o, args...);
-  switch (count - o) {
-    case 0: break;
-#if defined(__AVX512F__)
-    case 7: F<7>::run(o, args...); break;
-    case 6: F<6>::run(o, args...); break;
-    case 5: F<5>::run(o, args...); break;
-    case 4: F<4>::run(o, args...); break;
-#endif
-#if defined(__AVX__)
-    case 3: F<3>::run(o, args...); break;
-    case 2: F<2>::run(o, args...); break;
-#endif
-    default:
-      for (; o < count; ++o) F<1>::run(o, args...);
-  }
+  if (o < count) lastBlock<F>(count - o, o, args...);
 }
 
 template <int NB>

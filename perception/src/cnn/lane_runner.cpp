@@ -4,26 +4,32 @@ namespace colorfree::cnn::detail {
 
 void packWeights(const Layer& l, const float* params, float* packed) {
   const float* w = params + l.param_offset + l.filters;
-  if (l.type == LayerType::kConvolution) {
-    const int C = l.in.channels, K = l.size;
-    for (int o = 0; o < l.filters; ++o) {
-      for (int c = 0; c < C; ++c) {
-        for (int ky = 0; ky < K; ++ky) {
-          for (int kx = 0; kx < K; ++kx) {
-            packed[((static_cast<std::size_t>(o) * K + ky) * K + kx) * C + c] =
-                w[((static_cast<std::size_t>(o) * C + c) * K + ky) * K + kx];
+  const int O = l.filters;
+  for (int o0 = 0; o0 < O; o0 += kBlock) {
+    const int nb = std::min(kBlock, O - o0);
+    if (l.type == LayerType::kConvolution) {
+      const int C = l.in.channels, K = l.size;
+      float* block = packed + static_cast<std::size_t>(o0) * K * K * C;
+      for (int j = 0; j < nb; ++j) {
+        for (int c = 0; c < C; ++c) {
+          for (int ky = 0; ky < K; ++ky) {
+            for (int kx = 0; kx < K; ++kx) {
+              block[((static_cast<std::size_t>(ky) * K + kx) * C + c) * nb + j] =
+                  w[((static_cast<std::size_t>(o0 + j) * C + c) * K + ky) * K + kx];
+            }
           }
         }
       }
-    }
-  } else if (l.type == LayerType::kConnected) {
-    const int C = l.in.channels, H = l.in.height, W = l.in.width, n = l.in.size();
-    for (int o = 0; o < l.filters; ++o) {
-      for (int c = 0; c < C; ++c) {
-        for (int y = 0; y < H; ++y) {
-          for (int x = 0; x < W; ++x) {
-            packed[static_cast<std::size_t>(o) * n + (y * W + x) * C + c] =
-                w[static_cast<std::size_t>(o) * n + (c * H + y) * W + x];
+    } else if (l.type == LayerType::kConnected) {
+      const int C = l.in.channels, H = l.in.height, W = l.in.width, n = l.in.size();
+      float* block = packed + static_cast<std::size_t>(o0) * n;
+      for (int j = 0; j < nb; ++j) {
+        for (int c = 0; c < C; ++c) {
+          for (int y = 0; y < H; ++y) {
+            for (int x = 0; x < W; ++x) {
+              block[static_cast<std::size_t>((y * W + x) * C + c) * nb + j] =
+                  w[static_cast<std::size_t>(o0 + j) * n + (c * H + y) * W + x];
+            }
           }
         }
       }
