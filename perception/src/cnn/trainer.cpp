@@ -84,8 +84,10 @@ void connectedBackward(const Layer& l, const float* w, const Vec* in, const Vec*
 
 // The gradient goes to the first input of the window that equals the maximum (per lane).
 void maxPoolBackward(const Layer& l, const Vec* in, const Vec* out, const Vec* dout, Vec* din) {
+  typedef int IVec __attribute__((vector_size(kLanes * sizeof(int))));
   const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
   const int off = -l.pad / 2;
+  const Vec zero = {};
   for (int oy = 0; oy < l.out.height; ++oy) {
     const int iy0 = oy * l.stride + off;
     const int y0 = std::max(0, iy0), y1 = std::min(Hin, iy0 + l.size);
@@ -94,18 +96,15 @@ void maxPoolBackward(const Layer& l, const Vec* in, const Vec* out, const Vec* d
       const int x0 = std::max(0, ix0), x1 = std::min(Win, ix0 + l.size);
       const std::size_t po = (static_cast<std::size_t>(oy) * l.out.width + ox) * C;
       for (int c = 0; c < C; ++c) {
-        for (int b = 0; b < kLanes; ++b) {
-          const float m = out[po + c][b];
-          bool done = false;
-          for (int y = y0; y < y1 && !done; ++y) {
-            for (int x = x0; x < x1; ++x) {
-              const std::size_t pi = (static_cast<std::size_t>(y) * Win + x) * C + c;
-              if (in[pi][b] == m) {
-                din[pi][b] += dout[po + c][b];
-                done = true;
-                break;
-              }
-            }
+        const Vec m = out[po + c], g = dout[po + c];
+        IVec pending = {};
+        pending = ~pending;
+        for (int y = y0; y < y1; ++y) {
+          for (int x = x0; x < x1; ++x) {
+            const std::size_t pi = (static_cast<std::size_t>(y) * Win + x) * C + c;
+            const IVec hit = (in[pi] == m) & pending;
+            din[pi] += hit ? g : zero;
+            pending &= ~hit;
           }
         }
       }
@@ -305,6 +304,22 @@ class Backprop {
 
 // ---- augmentation -----------------------------------------------------------------------------
 
+// splitmix64: a small, fast, seeded generator for per-pixel noise.
+inline std::uint64_t nextRandom(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+// Zero mean, unit variance, bell-shaped: the sum of four uniforms (Irwin-Hall), scaled.
+inline float approxNormal(std::uint64_t& state) {
+  const std::uint64_t r = nextRandom(state);
+  float sum = 0.0f;
+  for (int k = 0; k < 4; ++k) sum += static_cast<float>((r >> (16 * k)) & 0xffff) * (1.0f / 65536.0f);
+  return (sum - 2.0f) * 1.7320508f;
+}
+
 class Augmenter {
  public:
   Augmenter(int width, int height, const AugmentationParams& p)
@@ -321,6 +336,7 @@ class Augmenter {
     const float contrast = 1.0f + sym(p_.contrast);
     const bool blur = unit(rng) < p_.blur_probability;
     const float sigma = p_.noise_stddev * unit(rng);
+    std::uint64_t noise_state = rng();
     const float cx = 0.5f * (w_ - 1), cy = 0.5f * (h_ - 1);
     const std::uint8_t* src = patch.data();
     for (int v = 0; v < h_; ++v) {
@@ -355,10 +371,9 @@ class Augmenter {
     float mean = 0.0f;
     for (int i = 0; i < n; ++i) mean += out[i];
     mean /= static_cast<float>(n);
-    std::normal_distribution<float> noise(0.0f, 1.0f);
     for (int i = 0; i < n; ++i) {
       float value = (out[i] - mean) * contrast + mean + brightness;
-      if (sigma > 0.0f) value += sigma * noise(rng);
+      if (sigma > 0.0f) value += sigma * approxNormal(noise_state);
       out[i] = std::clamp(value, 0.0f, 255.0f);
     }
   }
