@@ -62,8 +62,8 @@ TEST(CnnDnnAgreement, EveryShippedNetAgreesWithOpenCv) {
     SCOPED_TRACE(cfg);
     Net net = readDarknetCfg(cfg);
     net.initialise(seed++);
-    // Single patch, one full batch of lanes, and a ragged batch.
-    for (int count : {1, 16, 21}) {
+    // Single patches (the plane engine), one full batch of lanes, and a ragged batch.
+    for (int count : {1, 3, 16, 21}) {
       const float d = maxDifference(net, count, seed++, "agree");
       EXPECT_LT(d, test::kCnnTolerance) << count;
     }
@@ -111,7 +111,7 @@ activation=linear
 )";
   Net net = parseDarknetCfg(cfg, "inline");
   net.initialise(5);
-  EXPECT_LT(maxDifference(net, 17, 3, "options"), test::kCnnTolerance);
+  for (int count : {1, 17}) EXPECT_LT(maxDifference(net, count, 3, "options"), test::kCnnTolerance) << count;
 }
 
 }  // namespace

@@ -2,15 +2,23 @@
 
 #include "colorfree/perception/error.h"
 #include "lane_runner.h"
+#include "plane_runner.h"
 
 namespace colorfree::cnn {
 
 using detail::kLanes;
 
+namespace {
+// Up to this many patches beyond the last full batch run on the single-patch path.
+constexpr int kSinglePatchLimit = 3;
+}  // namespace
+
 struct Classifier::Impl {
-  explicit Impl(Net n) : net(std::move(n)), runner(net), patches(kLanes * net.input().size()) {}
+  explicit Impl(Net n)
+      : net(std::move(n)), runner(net, true), single(net), patches(kLanes * net.input().size()) {}
   Net net;
   mutable detail::LaneRunner runner;
+  mutable detail::PlaneRunner single;
   mutable std::vector<float> patches;
 };
 
@@ -44,7 +52,12 @@ void Classifier::run(const float* inputs, int count, float* probabilities) const
   const int n = impl_->net.input().size();
   const int k = impl_->net.classes();
   const int last = static_cast<int>(impl_->net.layers().size()) - 1;
-  for (int start = 0; start < count; start += kLanes) {
+  int start = 0;
+  // A last group of a few patches runs one by one: cheaper than a batch with idle lanes.
+  const int batched = count - count % kLanes;
+  const int rest = count - batched;
+  const int full_until = rest <= kSinglePatchLimit ? batched : count;
+  for (; start < full_until; start += kLanes) {
     const int m = std::min(kLanes, count - start);
     r.setInput(inputs + static_cast<std::size_t>(start) * n, m);
     r.forward();
@@ -52,6 +65,10 @@ void Classifier::run(const float* inputs, int count, float* probabilities) const
     for (int b = 0; b < m; ++b) {
       for (int c = 0; c < k; ++c) probabilities[static_cast<std::size_t>(start + b) * k + c] = out[c][b];
     }
+  }
+  for (; start < count; ++start) {
+    const float* p = impl_->single.run(inputs + static_cast<std::size_t>(start) * n);
+    std::copy(p, p + k, probabilities + static_cast<std::size_t>(start) * k);
   }
 }
 

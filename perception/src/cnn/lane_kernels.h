@@ -43,34 +43,71 @@ void packWeights(const Layer& l, const float* params, float* packed);
 // Packed weights come in blocks of kBlock output channels (the last block may be smaller), the
 // channels of a block interleaved innermost: convolution [block][ky][kx][c][j], connected
 // [block][i][j], so one pointer walks all weights a register block needs.
+// Pre-activation sums of output channels o0..o0+NB at output pixel (oy, ox).
+template <int NB>
+inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
+                   int oy, int ox, Vec* acc) {
+  const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
+  const int K = l.size, S = l.stride, P = l.pad;
+  const int iy0 = oy * S - P;
+  const int ky0 = std::max(0, -iy0), ky1 = std::min(K, Hin - iy0);
+  const int ix0 = ox * S - P;
+  const int kx0 = std::max(0, -ix0), kx1 = std::min(K, Win - ix0);
+  for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
+  for (int ky = ky0; ky < ky1; ++ky) {
+    const Vec* row = in + (static_cast<std::size_t>(iy0 + ky) * Win + ix0) * C;
+    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB;
+    for (int kx = kx0; kx < kx1; ++kx) {
+      const Vec* px = row + kx * C;
+      const float* wk = wrow + kx * C * NB;
+      for (int c = 0; c < C; ++c) {
+        const Vec v = px[c];
+        for (int j = 0; j < NB; ++j) acc[j] += wk[c * NB + j] * v;
+      }
+    }
+  }
+}
+
 template <int NB>
 inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
                       Vec* out) {
-  const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
-  const int K = l.size, S = l.stride, P = l.pad, O = l.out.channels;
-  const float* wb = w + static_cast<std::size_t>(o0) * K * K * C;
+  const int O = l.out.channels;
+  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels;
   for (int oy = 0; oy < l.out.height; ++oy) {
-    const int iy0 = oy * S - P;
-    const int ky0 = std::max(0, -iy0), ky1 = std::min(K, Hin - iy0);
     for (int ox = 0; ox < l.out.width; ++ox) {
-      const int ix0 = ox * S - P;
-      const int kx0 = std::max(0, -ix0), kx1 = std::min(K, Win - ix0);
       Vec acc[NB];
-      for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
-      for (int ky = ky0; ky < ky1; ++ky) {
-        const Vec* row = in + (static_cast<std::size_t>(iy0 + ky) * Win + ix0) * C;
-        const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB;
-        for (int kx = kx0; kx < kx1; ++kx) {
-          const Vec* px = row + kx * C;
-          const float* wk = wrow + kx * C * NB;
-          for (int c = 0; c < C; ++c) {
-            const Vec v = px[c];
-            for (int j = 0; j < NB; ++j) acc[j] += wk[c * NB + j] * v;
-          }
-        }
-      }
+      convAt<NB>(l, wb, bias, o0, in, oy, ox, acc);
       Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * O + o0;
       for (int j = 0; j < NB; ++j) po[j] = activate(acc[j], l.activation);
+    }
+  }
+}
+
+// A convolution followed by a max pool, without storing the convolution's output: the
+// activation is monotonic, so the maximum of the pre-activations is taken and activated once.
+template <int NB>
+inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, const float* bias,
+                          int o0, const Vec* in, Vec* out) {
+  const int O = l.out.channels;
+  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels;
+  const int off = -pool.pad / 2;
+  for (int py = 0; py < pool.out.height; ++py) {
+    const int cy0 = py * pool.stride + off;
+    const int y0 = std::max(0, cy0), y1 = std::min(l.out.height, cy0 + pool.size);
+    for (int px = 0; px < pool.out.width; ++px) {
+      const int cx0 = px * pool.stride + off;
+      const int x0 = std::max(0, cx0), x1 = std::min(l.out.width, cx0 + pool.size);
+      Vec best[NB];
+      for (int j = 0; j < NB; ++j) best[j] = splat(-std::numeric_limits<float>::infinity());
+      for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; ++x) {
+          Vec acc[NB];
+          convAt<NB>(l, wb, bias, o0, in, y, x, acc);
+          for (int j = 0; j < NB; ++j) best[j] = acc[j] > best[j] ? acc[j] : best[j];
+        }
+      }
+      Vec* po = out + (static_cast<std::size_t>(py) * pool.out.width + px) * O + o0;
+      for (int j = 0; j < NB; ++j) po[j] = activate(best[j], l.activation);
     }
   }
 }
@@ -112,6 +149,13 @@ struct ConvRun {
   }
 };
 template <int NB>
+struct ConvPoolRun {
+  static void run(int o, const Layer& l, const Layer& pool, const float* w, const float* b,
+                  const Vec* in, Vec* out) {
+    convPoolBlock<NB>(l, pool, w, b, o, in, out);
+  }
+};
+template <int NB>
 struct ConnectedRun {
   static void run(int o, const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
     connectedBlock<NB>(l, w, b, o, in, out);
@@ -120,6 +164,11 @@ struct ConnectedRun {
 
 inline void convForward(const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
   forBlocks<ConvRun>(l.out.channels, l, w, b, in, out);
+}
+
+inline void convPoolForward(const Layer& l, const Layer& pool, const float* w, const float* b,
+                            const Vec* in, Vec* out) {
+  forBlocks<ConvPoolRun>(l.out.channels, l, pool, w, b, in, out);
 }
 
 inline void connectedForward(const Layer& l, const float* w, const float* b, const Vec* in,

@@ -37,7 +37,7 @@ void packWeights(const Layer& l, const float* params, float* packed) {
   }
 }
 
-LaneRunner::LaneRunner(const Net& net) : net_(net) {
+LaneRunner::LaneRunner(const Net& net, bool fuse) : net_(net) {
   const auto& layers = net.layers();
   input_.assign(net.input().size(), splat(0.0f));
   outputs_.resize(layers.size());
@@ -53,6 +53,17 @@ LaneRunner::LaneRunner(const Net& net) : net_(net) {
     for (int j : layers[i].inputs) {
       route_sources_[i].push_back(outputs_[j].data());
       route_channels_[i].push_back(layers[j].out.channels);
+    }
+  }
+  fused_.assign(layers.size(), false);
+  if (fuse) {
+    std::vector<bool> routed(layers.size(), false);
+    for (const Layer& l : layers) {
+      for (int j : l.inputs) routed[j] = true;
+    }
+    for (std::size_t i = 0; i + 1 < layers.size(); ++i) {
+      fused_[i] = layers[i].type == LayerType::kConvolution && layers[i + 1].type == LayerType::kMaxPool &&
+                  !routed[i];
     }
   }
   repack();
@@ -89,7 +100,13 @@ void LaneRunner::forward() {
     Vec* out = outputs_[i].data();
     switch (l.type) {
       case LayerType::kConvolution:
-        convForward(l, packed_[i].data(), params + l.param_offset, in, out);
+        if (fused_[i]) {
+          convPoolForward(l, layers[i + 1], packed_[i].data(), params + l.param_offset, in,
+                          outputs_[i + 1].data());
+          ++i;
+        } else {
+          convForward(l, packed_[i].data(), params + l.param_offset, in, out);
+        }
         break;
       case LayerType::kConnected:
         connectedForward(l, packed_[i].data(), params + l.param_offset, in, out);

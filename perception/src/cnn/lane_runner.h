@@ -10,7 +10,9 @@ namespace colorfree::cnn::detail {
 /// backward pass reads them). All buffers are allocated once, in the constructor.
 class LaneRunner {
  public:
-  explicit LaneRunner(const Net& net);
+  /// `fuse`: run a convolution and the max pool after it as one step, without storing the
+  /// convolution's output (for inference; the trainer needs every output).
+  explicit LaneRunner(const Net& net, bool fuse = false);
 
   /// Re-reads the weights from the net's parameters (after a training step).
   void repack();
@@ -34,6 +36,7 @@ class LaneRunner {
   std::vector<std::vector<float>> packed_;
   std::vector<std::vector<const Vec*>> route_sources_;
   std::vector<std::vector<int>> route_channels_;
+  std::vector<bool> fused_;  ///< layer i is a convolution fused with the max pool i + 1
 };
 
 }  // namespace colorfree::cnn::detail
