@@ -267,6 +267,9 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
   s.frame_rate_hz = r.number("frame_rate_hz", 0.1, 1000);
   s.seed = static_cast<std::uint64_t>(
       r.integer("seed", 0, std::numeric_limits<long long>::max()));
+  std::string nao = "v5";
+  if (const YAML::Node v = r.optional("nao")) nao = r.choice(v, "nao", {"v5", "v6"});
+  s.camera_horizontal_fov_deg = nao == "v6" ? 56.3 : 60.9;
   s.shadows = r.boolean("shadows", true);
   s.multisamples = static_cast<int>(r.integer("multisamples", 0, 16, 4));
 
@@ -276,6 +279,7 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
     s.observer.pose.y_m = o.number("y_m", -field.carpetHalfWidth(), field.carpetHalfWidth());
     s.observer.pose.heading_rad = o.number("heading_deg", -360, 360) * kDegToRad;
     s.observer.head = parseHead(o);
+    s.observer.jersey_gray = o.number("jersey_gray", 0, 1, 0.5);
     s.observer.motion = parseMotion(o, "motion", 0);
     o.finish();
   }
@@ -318,11 +322,10 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
     for (const auto& [name, p] : presetNames()) {
       if (name == preset) s.lighting.preset = p;
     }
-    s.lighting.scale = l.number("scale", 0, 20, 1.0);
-    // The flicker preset flickers by default; any preset can be made to.
-    const bool flicker = s.lighting.preset == LightingPreset::kFlicker;
-    s.lighting.flicker_amplitude = l.number("flicker_amplitude", 0, 1, flicker ? 0.3 : 0.0);
-    s.lighting.flicker_frequency_hz = l.number("flicker_frequency_hz", 0, 500, flicker ? 3.3 : 0.0);
+    // The world takes 0..10 times a preset's light; scale × (1 + flicker) stays inside.
+    s.lighting.scale = l.number("scale", 0, 6, 1.0);
+    s.lighting.flicker_amplitude = l.number("flicker_amplitude", 0, 0.6, 0.0);
+    s.lighting.flicker_frequency_hz = l.number("flicker_frequency_hz", 0, 500, 0.0);
     l.finish();
   }
 

@@ -56,6 +56,24 @@ TEST(ScenarioTest, MinimalScenarioGetsItsValuesAndTheDefaults) {
   EXPECT_TRUE(s.cases[0].values.empty());
 }
 
+TEST(ScenarioTest, LightingPresetsAreSpelledAsTheWorldSpellsThem) {
+  for (LightingPreset p : {LightingPreset::kNormal, LightingPreset::kDim, LightingPreset::kOverexposed,
+                           LightingPreset::kDirectional, LightingPreset::kUneven,
+                           LightingPreset::kFlicker}) {
+    std::string text = kMinimal;
+    text.replace(text.find("preset: dim"), 11, "preset: " + lightingPresetName(p));
+    EXPECT_EQ(Scenario::parse(text, "x.yaml").cases[0].settings.lighting.preset, p);
+  }
+}
+
+TEST(ScenarioTest, NaoVersionPicksTheCameraFieldOfView) {
+  EXPECT_DOUBLE_EQ(Scenario::parse(kMinimal, "x").cases[0].settings.camera_horizontal_fov_deg, 60.9);
+  const Scenario v6 = Scenario::parse(std::string(kMinimal) + "nao: v6\n", "x");
+  EXPECT_DOUBLE_EQ(v6.cases[0].settings.camera_horizontal_fov_deg, 56.3);
+  EXPECT_NE(errorOf(std::string(kMinimal) + "nao: v7\n").find("bad.yaml:12: nao: 'v7' is not one of"),
+            std::string::npos);
+}
+
 TEST(ScenarioTest, BottomCameraDefaultsToItsResolution) {
   std::string text = kMinimal;
   text.replace(text.find("camera: top"), 11, "camera: bottom");

@@ -33,6 +33,7 @@ struct HeadSpec {
 
 struct ObserverSpec {
   FieldPose pose;
+  double jersey_gray = 0.5;
   HeadSpec head;
   MotionSpec motion;
 };
@@ -56,8 +57,8 @@ struct BallSpec {
 struct LightingSpec {
   LightingPreset preset = LightingPreset::kNormal;
   double scale = 1.0;                ///< factor on every light of the preset
-  double flicker_amplitude = 0;      ///< relative: 0.2 = ±20 % over time
-  double flicker_frequency_hz = 0;
+  double flicker_amplitude = 0;      ///< sinusoidal flicker, relative: 0.2 = ±20 % over time
+  double flicker_frequency_hz = 0;   ///< (the flicker preset adds world.h's flickerScale too)
 };
 
 /// Camera effects applied after rendering (camera_effects.h applies them).
@@ -97,6 +98,7 @@ struct CaseSettings {
   std::optional<BallSpec> ball;
   LightingSpec lighting;
   EffectsSpec effects;
+  double camera_horizontal_fov_deg = 60.9;  ///< NAO V4/V5 (V6: 56.3)
   bool shadows = true;
   int multisamples = 4;
   int frames = 1;
