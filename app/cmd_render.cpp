@@ -18,7 +18,8 @@ namespace {
 // A one-line progress bar on stderr, redrawn in place.
 class ProgressBar {
  public:
-  explicit ProgressBar(bool enabled) : enabled_(enabled), start_(std::chrono::steady_clock::now()) {}
+  explicit ProgressBar(bool enabled)
+      : enabled_(enabled), start_(std::chrono::steady_clock::now()) {}
   void update(int done, int total, const std::string& label) {
     if (!enabled_) return;
     constexpr int kWidth = 30;

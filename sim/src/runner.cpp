@@ -159,7 +159,8 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
     exposure = composeSubframes(subframes, plan);
     // The truth and the object map are at the frame time (the middle of the exposure).
     setSceneAt(renderer, settings, frame_index, t);
-    if (object_map) frame.truth.object_map = renderer.render(settings.camera, w, h, true).object_map;
+    if (object_map)
+      frame.truth.object_map = renderer.render(settings.camera, w, h, true).object_map;
   }
   frame.truth.camera.model = renderer.cameraModel(settings.camera, w, h);
   frame.truth.camera.camera_to_field = renderer.cameraToField(settings.camera);

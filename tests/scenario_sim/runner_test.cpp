@@ -57,7 +57,8 @@ class FakeRenderer : public SceneRenderer {
     for (int y = 0; y < h; ++y) {
       if (spec_.ball && column >= 0 && column < w) {
         out.gray.at(column, y) = 220;
-        if (object_map) out.object_map.labels[static_cast<std::size_t>(y) * w + column] = kObjectBall;
+        if (object_map)
+          out.object_map.labels[static_cast<std::size_t>(y) * w + column] = kObjectBall;
       }
     }
     return out;
@@ -139,11 +140,10 @@ TEST(RunnerTest, MotionBlurAveragesSubframesAcrossTheExposure) {
 
 TEST(RunnerTest, RollingShutterSkewsAMovingBall) {
   FakeLog log;
-  ScenarioRunner runner(
-      Scenario::parse(scenario("effects: {rolling_shutter: true, readout_ms: 16, "
-                               "rolling_shutter_bands: 16}\n"),
-                      "fake.yaml"),
-      fakeFactory(log));
+  ScenarioRunner runner(Scenario::parse(scenario("effects: {rolling_shutter: true, readout_ms: 16, "
+                                                 "rolling_shutter_bands: 16}\n"),
+                                        "fake.yaml"),
+                        fakeFactory(log));
   const RenderedFrame f = runner.render(0, 1, false);
   // Row y is read at (y + 0.5) ms - 8 ms: the ball moves 1 mm (1 px) per row.
   for (int y = 0; y < 16; ++y) {

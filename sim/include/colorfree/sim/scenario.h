@@ -14,10 +14,10 @@ namespace colorfree::sim {
 struct MotionSpec {
   enum class Kind { kStand, kWalk, kTurn };
   Kind kind = Kind::kStand;
-  double speed_mps = 0;           ///< walk: speed over the ground
-  double direction_rad = 0;       ///< walk: direction of travel relative to the heading
-  double turn_rate_radps = 0;     ///< turn: positive turns left
-  double phase = 0;               ///< gait phase at time 0, in [0, 1)
+  double speed_mps = 0;        ///< walk: speed over the ground
+  double direction_rad = 0;    ///< walk: direction of travel relative to the heading
+  double turn_rate_radps = 0;  ///< turn: positive turns left
+  double phase = 0;            ///< gait phase at time 0, in [0, 1)
 };
 std::string motionKindName(MotionSpec::Kind kind);
 
@@ -56,9 +56,9 @@ struct BallSpec {
 
 struct LightingSpec {
   LightingPreset preset = LightingPreset::kNormal;
-  double scale = 1.0;                ///< factor on every light of the preset
-  double flicker_amplitude = 0;      ///< sinusoidal flicker, relative: 0.2 = ±20 % over time
-  double flicker_frequency_hz = 0;   ///< (the flicker preset adds world.h's flickerScale too)
+  double scale = 1.0;               ///< factor on every light of the preset
+  double flicker_amplitude = 0;     ///< sinusoidal flicker, relative: 0.2 = ±20 % over time
+  double flicker_frequency_hz = 0;  ///< (the flicker preset adds world.h's flickerScale too)
 };
 
 /// Camera effects applied after rendering (camera_effects.h applies them).
