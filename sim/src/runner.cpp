@@ -72,7 +72,7 @@ WorldState scenarioStateAt(const CaseSettings& settings, int frame_index) {
     t.jersey_gray = spec.jersey_gray;
     s.robots.push_back(t);
   }
-  const double radius = FieldDimensions::loadDefault().ballRadius();
+  const double radius = settings.ball_radius_m;
   s.ball.radius_m = radius;
   if (settings.ball) {
     const BallMotionState b =
@@ -124,8 +124,8 @@ void ScenarioRunner::setSceneAt(SceneRenderer& renderer, const CaseSettings& set
     renderer.setRobot(static_cast<int>(i), robotMotionAt(r.pose, r.motion, t_s));
   }
   if (settings.ball) {
-    const double radius = FieldDimensions::loadDefault().ballRadius();
-    renderer.setBall(ballAt(*settings.ball, radius, initialBallOrientation(settings.seed), t_s));
+    renderer.setBall(
+        ballAt(*settings.ball, settings.ball_radius_m, initialBallOrientation(settings.seed), t_s));
   }
   renderer.setLighting(LightingState{lightingScaleAt(settings, frame_index, t_s)});
 }

@@ -157,7 +157,9 @@ class MapReader {
   void finish() const {
     for (const auto& kv : node_) {
       const std::string key = kv.first.Scalar();
-      if (!used_.count(key)) fail(kv.first.Mark(), keyPath(key), "unknown key");
+      // A key a sweep added has no line of its own: its value (in the sweep list) has one.
+      const YAML::Mark mark = kv.first.Mark().line >= 0 ? kv.first.Mark() : kv.second.Mark();
+      if (!used_.count(key)) fail(mark, keyPath(key), "unknown key");
     }
   }
 
@@ -255,6 +257,7 @@ HeadSpec parseHead(MapReader& parent) {
 CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
                        const FieldDimensions& field) {
   CaseSettings s;
+  s.ball_radius_m = field.ballRadius();
   MapReader r(root, "", origin);
   r.required("name");
   r.optional("sweep");

@@ -309,7 +309,8 @@ TEST(ScenarioTest, BadSweepsNameTheLineAndPath) {
       << no_robot;
   const std::string unknown =
       errorOf(std::string(kMinimal) + "sweep:\n  - path: lighting.brightness\n    values: [1]\n");
-  EXPECT_NE(unknown.find("lighting.brightness: unknown key"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("bad.yaml:14: lighting.brightness: unknown key"), std::string::npos)
+      << unknown;
   const std::string malformed =
       errorOf(std::string(kMinimal) + "sweep:\n  - path: robots[x].heading_deg\n    values: [1]\n");
   EXPECT_NE(malformed.find("bad.yaml:13: sweep[0].path: malformed setting path"), std::string::npos)

@@ -104,6 +104,7 @@ struct CaseSettings {
   int frames = 1;
   double frame_rate_hz = 30;
   std::uint64_t seed = 1;
+  double ball_radius_m = 0.05;                ///< from the field dimensions file
   double orientation_tolerance_rad = 0.3927;  ///< scoring: 22.5° unless the scenario says
 };
 
