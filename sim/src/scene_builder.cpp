@@ -16,14 +16,12 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 // Look of the field and the hall. Sizes of the field itself come from FieldDimensions only.
-constexpr int kCarpetTexturePx = 2048;
-constexpr double kCarpetTileM = 2.6;
-constexpr int kLineTexturePx = 512;
-constexpr double kLineTileM = 0.65;
+constexpr int kCarpetTexturePx = 1024;
+constexpr double kCarpetTileM = 1.3;
 constexpr int kBallFacePx = 128;
-constexpr double kCarpetGridM = 0.1;       // plane tessellation: per-vertex lighting resolution
-constexpr double kCarpetTopZ = -0.0015;    // carpet just below z = 0 so lines sit on top of it
-constexpr double kLineTopZ = 0.0005;
+constexpr double kCarpetGridM = 0.2;       // plane tessellation: per-vertex lighting resolution
+constexpr double kCarpetTopZ = -0.001;     // carpet just below z = 0 so lines sit on top of it
+constexpr double kLineTopZ = 0.0;  // the lines' top is the ground plane the camera model sees
 // Line boxes reach well below the carpet: their bottom faces then stay clear of the carpet in
 // the shadow map (no shadow acne on the lines).
 constexpr double kLineBottomZ = -0.02;
@@ -32,6 +30,12 @@ constexpr double kHallMarginXM = 4.5;      // carpet edge to end wall
 constexpr double kHallMarginYM = 3.5;      // carpet edge to side wall
 constexpr double kHallHeightM = 4.5;
 constexpr int kCircleSegments = 64;
+// Tessellation and shadow map: llvmpipe's vertex work grows with the triangles of every round
+// geom (6 NAOs, nets, people), its fill work with the shadow map's size.
+constexpr int kRoundSlices = 14;
+constexpr int kRoundStacks = 8;
+constexpr int kBoxQuads = 2;
+constexpr int kShadowMapPx = 1024;
 constexpr double kNetSpacingM = 0.1;
 constexpr double kNetStringRadiusM = 0.004;
 constexpr int kPeople = 12;
@@ -40,7 +44,7 @@ constexpr int kBoardVariants = 4;
 // Grey levels (material rgba) chosen so that the normal preset gives luma values close to a NAO's
 // view of an SPL field: carpet about 80..100, lines about 200..220, robots near white.
 constexpr double kCarpetGray = 0.47;
-constexpr double kLineGray = 0.7;
+constexpr double kLineGray = 0.62;
 
 std::string f(double x) {
   std::ostringstream o;
@@ -59,8 +63,8 @@ class SceneWriter {
   int geom_count = 0;
 
   void texture2d(const std::string& name, const GrayTexture& tex) {
-    const std::string file = name + ".png";
-    model.files[file] = encodePng(tex);
+    const std::string file = name + ".tex";
+    model.files[file] = encodeMujocoCustom(tex);
     assets << "<texture name=\"" << name << "\" type=\"2d\" file=\"" << file << "\"/>\n";
   }
   void material(const std::string& name, const std::string& texture, double gray, double texrepeat,
@@ -89,6 +93,14 @@ class SceneWriter {
                double z1, double r, const std::string& material) {
     geom(prefix, "capsule",
          "fromto=\"" + f3(x0, y0, z0) + " " + f3(x1, y1, z1) + "\" size=\"" + f(r) + "\"", material);
+  }
+  // A thin bar between two points (boxes are much cheaper to draw than capsules).
+  void bar(const std::string& prefix, double x0, double y0, double z0, double x1, double y1,
+           double z1, double half_width, const std::string& material) {
+    geom(prefix, "box",
+         "fromto=\"" + f3(x0, y0, z0) + " " + f3(x1, y1, z1) + "\" size=\"" + f(half_width) + " " +
+             f(half_width) + " 0\"",
+         material);
   }
   void cylinder(const std::string& prefix, double x0, double y0, double z0, double x1, double y1,
                 double z1, double r, const std::string& material) {
@@ -175,17 +187,17 @@ void writeGoals(SceneWriter& w, const FieldDimensions& fd) {
     // The net: strings on the back, the sides and the roof.
     const double sr = kNetStringRadiusM;
     for (double y = -post_y + kNetSpacingM; y < post_y - 1e-6; y += kNetSpacingM) {
-      w.capsule(kGoalPrefix, back, y, 0, back, y, top, sr, "net");
-      w.capsule(kGoalPrefix, x, y, top, back, y, top, sr, "net");
+      w.bar(kGoalPrefix, back, y, 0, back, y, top, sr, "net");
+      w.bar(kGoalPrefix, x, y, top, back, y, top, sr, "net");
     }
     for (double z = kNetSpacingM; z < top - 1e-6; z += kNetSpacingM) {
-      w.capsule(kGoalPrefix, back, -post_y, z, back, post_y, z, sr, "net");
-      for (double py : {-post_y, post_y}) w.capsule(kGoalPrefix, x, py, z, back, py, z, sr, "net");
+      w.bar(kGoalPrefix, back, -post_y, z, back, post_y, z, sr, "net");
+      for (double py : {-post_y, post_y}) w.bar(kGoalPrefix, x, py, z, back, py, z, sr, "net");
     }
     for (double d = kNetSpacingM; d < fd.goal_depth_m - 1e-6; d += kNetSpacingM) {
       const double xd = x + s * d;
-      w.capsule(kGoalPrefix, xd, -post_y, top, xd, post_y, top, sr, "net");
-      for (double py : {-post_y, post_y}) w.capsule(kGoalPrefix, xd, py, 0, xd, py, top, sr, "net");
+      w.bar(kGoalPrefix, xd, -post_y, top, xd, post_y, top, sr, "net");
+      for (double py : {-post_y, post_y}) w.bar(kGoalPrefix, xd, py, 0, xd, py, top, sr, "net");
     }
   }
 }
@@ -303,7 +315,7 @@ void writeLights(SceneWriter& w, const SceneSpec& spec, std::mt19937_64& rng) {
       const V sun = V(0.25, -0.45, -1).normalized();
       for (int i = 0; i < 4; ++i) {
         const V target((u(rng) * 2 - 1) * fd.halfLength(), (u(rng) * 2 - 1) * fd.halfWidth(), 0);
-        w.light(target - sun * 3.5, sun, false, false, 0.9, 10 + 8 * u(rng));
+        w.light(target - sun * 3.5, sun, false, false, 1.3, 10 + 8 * u(rng));
       }
       break;
     }
@@ -389,15 +401,13 @@ SceneModel buildScene(const SceneSpec& spec) {
   // Textures and materials.
   const GrayTexture carpet = carpetTexture(spec.seed, kCarpetTexturePx);
   w.texture2d("carpet_tex", carpet);
-  GrayTexture line = carpetTexture(spec.seed + 1, kLineTexturePx);
-  for (auto& p : line.pixels) p = std::uint8_t(190 + p / 4);
-  w.texture2d("line_tex", line);
-  const auto faces = ballCubeFaces(kBallFacePx);
+  // The print does not depend on the seed: made once per process.
+  static const std::vector<GrayTexture> faces = ballCubeFaces(kBallFacePx);
   const char* face_names[] = {"right", "left", "up", "down", "front", "back"};
   w.assets << "<texture name=\"ball_tex\" type=\"cube\"";
   for (int i = 0; i < 6; ++i) {
-    const std::string file = std::string("ball_") + face_names[i] + ".png";
-    w.model.files[file] = encodePng(faces[i]);
+    const std::string file = std::string("ball_") + face_names[i] + ".tex";
+    w.model.files[file] = encodeMujocoCustom(faces[i]);
     w.assets << " file" << face_names[i] << "=\"" << file << "\"";
   }
   w.assets << "/>\n";
@@ -414,7 +424,9 @@ SceneModel buildScene(const SceneSpec& spec) {
     w.texture2d("cloth" + std::to_string(i) + "_tex", hallTexture(HallTexture::kCloth, s, i, 64, 64));
   }
   w.material("carpet", "carpet_tex", kCarpetGray, 1 / kCarpetTileM);
-  w.material("line", "line_tex", kLineGray, 1 / kLineTileM);
+  // Lines are flat white: where two line boxes overlap (corners, crossings, circle chords) their
+  // coplanar tops then look the same whichever wins the depth test.
+  w.material("line", "", kLineGray, 0);
   w.material("goal", "", 0.93, 0, 0.2, 0.3);
   w.material("net", "", 0.8, 0);
   w.material("ball", "ball_tex", 1.0, 1, 0.15, 0.2);
@@ -464,13 +476,15 @@ SceneModel buildScene(const SceneSpec& spec) {
     << "<option gravity=\"0 0 0\"/>\n"
     << "<visual>\n"
     << "<global offwidth=\"" << spec.max_width_px << "\" offheight=\"" << spec.max_height_px << "\"/>\n"
-    << "<quality shadowsize=\"2048\" offsamples=\"" << spec.multisamples << "\"/>\n"
+    << "<quality shadowsize=\"" << kShadowMapPx << "\" offsamples=\"" << spec.multisamples
+    << "\" numslices=\"" << kRoundSlices << "\" numstacks=\"" << kRoundStacks << "\" numquads=\"" << kBoxQuads << "\"/>\n"
     << "<headlight active=\"1\" ambient=\"" << f3(w.model.headlight_ambient, w.model.headlight_ambient,
                                                   w.model.headlight_ambient)
     << "\" diffuse=\"0 0 0\" specular=\"0 0 0\"/>\n"
-    // Near clip 1 cm so that the bottom camera sees the own chest and feet; shadows of the
-    // directional light cover the carpet.
-    << "<map znear=\"0.01\" zfar=\"60\" haze=\"0\" shadowclip=\"" << f(fd.carpetHalfLength() + 1)
+    // Near clip 3 cm so that the bottom camera sees the own chest and feet, while the depth
+    // buffer still separates lines and carpet (1 mm) 10 m away; shadows of the directional light
+    // cover the carpet.
+    << "<map znear=\"0.03\" zfar=\"60\" haze=\"0\" shadowclip=\"" << f(fd.carpetHalfLength() + 1)
     << "\" shadowscale=\"0.8\"/>\n"
     << "</visual>\n"
     << "<statistic extent=\"1\" center=\"0 0 0\"/>\n"

@@ -48,6 +48,38 @@ NaoHandles findNao(const mjModel* m, const std::string& prefix) {
   return h;
 }
 
+// Objects further outside the view than this may still cast a shadow into it (a standing NAO
+// under a light 35° above the horizon).
+constexpr double kShadowCasterMarginM = 1.0;
+
+// Drops the scene's geoms whose bounding spheres lie outside the camera's view (widened by
+// `margin_m`): llvmpipe transforms and lights every vertex it is given, seen or not.
+void cullOutsideView(mjvScene& scn, const CameraIntrinsics& k, double margin_m) {
+  const mjvGLCamera& c = scn.camera[0];
+  const Eigen::Vector3d pos(c.pos[0], c.pos[1], c.pos[2]);
+  const Eigen::Vector3d forward = Eigen::Vector3d(c.forward[0], c.forward[1], c.forward[2]).normalized();
+  const Eigen::Vector3d up = Eigen::Vector3d(c.up[0], c.up[1], c.up[2]).normalized();
+  const Eigen::Vector3d right = forward.cross(up);
+  const double tan_x = (k.width_px / 2.0) / k.focal_x_px;
+  const double tan_y = (k.height_px / 2.0) / k.focal_y_px;
+  const double sec_x = std::sqrt(1 + tan_x * tan_x), sec_y = std::sqrt(1 + tan_y * tan_y);
+  int kept = 0;
+  for (int i = 0; i < scn.ngeom; ++i) {
+    const mjvGeom& g = scn.geoms[i];
+    bool visible = true;
+    // Planes and decor have no bounding sphere: always drawn.
+    if (g.modelrbound > 0) {
+      const Eigen::Vector3d d = Eigen::Vector3d(g.pos[0], g.pos[1], g.pos[2]) - pos;
+      const double r = g.modelrbound + margin_m;
+      const double z = d.dot(forward);
+      visible = z > -r && std::abs(d.dot(right)) <= z * tan_x + r * sec_x &&
+                std::abs(d.dot(up)) <= z * tan_y + r * sec_y;
+    }
+    if (visible) scn.geoms[kept++] = g;
+  }
+  scn.ngeom = kept;
+}
+
 }  // namespace
 
 LightingPreset lightingPresetFromName(const std::string& name) {
@@ -302,6 +334,7 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
   w.scn.flags[mjRND_SEGMENT] = 0;
   w.scn.flags[mjRND_IDCOLOR] = 0;
   mjv_updateScene(m, w.data, &w.opt, nullptr, &w.cam, mjCAT_ALL, &w.scn);
+  cullOutsideView(w.scn, k, w.spec.shadows ? kShadowCasterMarginM : 0.0);
   const mjrRect viewport{0, 0, width_px, height_px};
   mjr_render(viewport, &w.scn, &w.con);
   mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con);
@@ -327,7 +360,9 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
     w.scn.flags[mjRND_SEGMENT] = 0;
     w.scn.flags[mjRND_IDCOLOR] = 0;
     // segid + 1 per pixel; segid indexes the scene's geoms.
-    std::vector<std::uint16_t> seg_label(std::size_t(w.scn.ngeom) + 1, kObjectNone);
+    int max_segid = 0;
+    for (int i = 0; i < w.scn.ngeom; ++i) max_segid = std::max(max_segid, w.scn.geoms[i].segid);
+    std::vector<std::uint16_t> seg_label(std::size_t(max_segid) + 2, kObjectNone);
     for (int i = 0; i < w.scn.ngeom; ++i) {
       const mjvGeom& g = w.scn.geoms[i];
       if (g.segid < 0 || g.objtype != mjOBJ_GEOM || g.objid < 0 || g.objid >= m->ngeom) continue;

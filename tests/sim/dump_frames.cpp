@@ -69,6 +69,9 @@ int main(int argc, char** argv) {
       if (std::string(preset) == "flicker") world.setLighting({flickerScale(spec.seed, 3)});
       for (const auto cam : {NaoCamera::kTop, NaoCamera::kBottom}) {
         const std::string name = out + "/" + preset + (cam == NaoCamera::kTop ? "_top" : "_bottom");
+        // The bottom camera with the head pitched down, so the own feet show.
+        obs.posture.head_pitch = cam == NaoCamera::kTop ? 0.2 : 0.45;
+        world.setObserver(obs);
         const RenderOutput r = world.render(cam, width, height, true);
         writeGrayPng(name + ".png", r.gray.view());
         // Mean luma per object label, to compare grey levels with real frames.
