@@ -124,7 +124,9 @@ struct World::Impl {
   mjvOption opt;
   mjvCamera cam;
   mjrContext con;
-  bool scene_made = false, context_made = false;
+  // The object map is drawn without anti-aliasing: a second renderer context without MSAA.
+  mjrContext con_segment;
+  bool scene_made = false, context_made = false, segment_context_made = false;
   std::vector<std::uint16_t> geom_label;
   NaoHandles observer;
   std::vector<NaoHandles> robots;
@@ -134,10 +136,9 @@ struct World::Impl {
   std::vector<std::uint8_t> rgb;
 
   ~Impl() {
-    if (context_made) {
-      gl->makeCurrent();
-      mjr_freeContext(&con);
-    }
+    if (context_made || segment_context_made) gl->makeCurrent();
+    if (context_made) mjr_freeContext(&con);
+    if (segment_context_made) mjr_freeContext(&con_segment);
     if (scene_made) mjv_freeScene(&scn);
     if (data != nullptr) mj_deleteData(data);
   }
@@ -243,6 +244,14 @@ World::World(const SceneSpec& spec) : impl_(std::make_unique<Impl>()) {
   w.context_made = true;
   mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   if (w.con.currentBuffer != mjFB_OFFSCREEN) throw Error("world: no off-screen framebuffer");
+  const int samples = m->vis.quality.offsamples;
+  m->vis.quality.offsamples = 0;
+  mjr_defaultContext(&w.con_segment);
+  mjr_makeContext(m, &w.con_segment, mjFONTSCALE_100);
+  w.segment_context_made = true;
+  m->vis.quality.offsamples = samples;
+  mjr_setBuffer(mjFB_OFFSCREEN, &w.con_segment);
+  if (w.con_segment.currentBuffer != mjFB_OFFSCREEN) throw Error("world: no off-screen framebuffer");
   if (w.con.offWidth < spec.max_width_px || w.con.offHeight < spec.max_height_px) {
     throw Error("world: off-screen framebuffer is smaller than asked for");
   }
@@ -327,7 +336,6 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
   w.cam.fixedcamid = id;
 
   w.gl->makeCurrent();
-  mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   w.scn.flags[mjRND_SHADOW] = w.spec.shadows ? 1 : 0;
   w.scn.flags[mjRND_SKYBOX] = 0;
   w.scn.flags[mjRND_REFLECTION] = 0;
@@ -336,6 +344,7 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
   mjv_updateScene(m, w.data, &w.opt, nullptr, &w.cam, mjCAT_ALL, &w.scn);
   cullOutsideView(w.scn, k, w.spec.shadows ? kShadowCasterMarginM : 0.0);
   const mjrRect viewport{0, 0, width_px, height_px};
+  mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   mjr_render(viewport, &w.scn, &w.con);
   mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con);
 
@@ -355,8 +364,9 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
     w.scn.flags[mjRND_SHADOW] = 0;
     w.scn.flags[mjRND_SEGMENT] = 1;
     w.scn.flags[mjRND_IDCOLOR] = 1;
-    mjr_render(viewport, &w.scn, &w.con);
-    mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con);
+    mjr_setBuffer(mjFB_OFFSCREEN, &w.con_segment);
+    mjr_render(viewport, &w.scn, &w.con_segment);
+    mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con_segment);
     w.scn.flags[mjRND_SEGMENT] = 0;
     w.scn.flags[mjRND_IDCOLOR] = 0;
     // segid + 1 per pixel; segid indexes the scene's geoms.

@@ -70,6 +70,7 @@ BENCHMARK(BM_Render)
     ->Args({320, 240, 0, 0})
     ->Args({640, 480, 3, 1})
     ->Args({320, 240, 0, 1})
+    ->Args({640, 480, 0, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
