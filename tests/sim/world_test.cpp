@@ -41,7 +41,8 @@ struct LineRect {
 // The field's lines from the rule book, written here independently of the scene builder.
 bool onFieldLine(const FieldDimensions& fd, const Eigen::Vector2d& p) {
   const double L = fd.halfLength(), W = fd.halfWidth(), h = fd.line_width_m / 2;
-  std::vector<LineRect> rects = {{{-L, W}, {L, W}, h}, {{-L, -W}, {L, -W}, h}, {{0, -W}, {0, W}, h}};
+  std::vector<LineRect> rects = {
+      {{-L, W}, {L, W}, h}, {{-L, -W}, {L, -W}, h}, {{0, -W}, {0, W}, h}};
   for (double s : {-1.0, 1.0}) {
     const double pa = s * (L - fd.penalty_area_length_m), pw = fd.penalty_area_width_m / 2;
     const double ga = s * (L - fd.goal_area_length_m), gw = fd.goal_area_width_m / 2;
@@ -125,12 +126,14 @@ void expectLinesWhereProjected(World& world, const FieldPose& observer, NaoCamer
   const LineCheck c = checkLines(out, model, observer, fd);
   EXPECT_GT(c.compared, w * h / 4);
   EXPECT_GT(c.line_pixels, w * h / 800) << "too few line pixels to check the projection";
-  EXPECT_EQ(c.wrong, 0) << "pixels more than a pixel away from where the camera model puts the lines";
+  EXPECT_EQ(c.wrong, 0)
+      << "pixels more than a pixel away from where the camera model puts the lines";
   // The check sees a camera model that is off by two pixels.
   CameraIntrinsics shifted = model.intrinsics();
   shifted.center_x_px += 2;
   shifted.center_y_px += 2;
-  EXPECT_GE(checkLines(out, CameraModel(shifted, model.cameraToRobot()), observer, fd, 50).wrong, 50);
+  EXPECT_GE(checkLines(out, CameraModel(shifted, model.cameraToRobot()), observer, fd, 50).wrong,
+            50);
 }
 
 TEST(World, FieldLinesLandWhereTheCameraModelProjectsThem) {
@@ -249,7 +252,8 @@ TEST(World, RobotTurnedBy90DegreesLooksDifferentAtTheFeet) {
   const FeetView back = renderFeet(world, 0, top, bottom);
   const FeetView front_again = renderFeet(world, kPi, top, bottom);
   ASSERT_GT(front.pixels, 200);
-  const auto differing = [](const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  const auto differing = [](const std::vector<std::uint8_t>& a,
+                            const std::vector<std::uint8_t>& b) {
     int n = 0;
     for (std::size_t i = 0; i < a.size(); ++i) n += a[i] != b[i] ? 1 : 0;
     return n;
@@ -322,9 +326,7 @@ TEST(World, LightingPresetsAndScaleChangeTheBrightness) {
 }
 
 TEST(World, ImpossibleSpecsAndCallsGiveErrors) {
-  const auto fails = [](const SceneSpec& spec) {
-    EXPECT_THROW(World w(spec), Error);
-  };
+  const auto fails = [](const SceneSpec& spec) { EXPECT_THROW(World w(spec), Error); };
   SceneSpec spec = smallSpec();
   spec.robot_count = 10;
   fails(spec);
@@ -356,7 +358,8 @@ TEST(World, ImpossibleSpecsAndCallsGiveErrors) {
 
 TEST(MjcfLoader, ModelsMujocoRejectsGiveErrorsWithItsMessage) {
   try {
-    loadMjcf("<mujoco><worldbody><geom type=\"sphere\" size=\"-1\"/></worldbody>", {}, "broken.xml");
+    loadMjcf("<mujoco><worldbody><geom type=\"sphere\" size=\"-1\"/></worldbody>", {},
+             "broken.xml");
     FAIL() << "a truncated model was accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("broken.xml"), std::string::npos) << e.what();
