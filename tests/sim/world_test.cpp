@@ -158,6 +158,42 @@ TEST(World, FieldLinesLandWhereTheCameraModelProjectsThem) {
   expectLinesWhereProjected(world, obs.pose, NaoCamera::kTop, spec.field, 320, 240);
 }
 
+TEST(World, BallIsRenderedWhereTheCameraModelProjectsIt) {
+  const SceneSpec spec = smallSpec();
+  World world(spec);
+  NaoState obs;
+  obs.pose = {-0.5, 0.3, 0.2};
+  obs.posture.head_pitch = 0.25;
+  world.setObserver(obs);
+  const CameraModel camera = world.cameraModel(NaoCamera::kTop, 640, 480);
+  const double r = spec.field.ballRadius();
+  // Near the image centre a small sphere's silhouette is centred on its projected centre.
+  for (const Eigen::Vector3d& ball_in_robot :
+       {Eigen::Vector3d(1.4, 0.0, r), Eigen::Vector3d(1.2, 0.1, r),
+        Eigen::Vector3d(2.0, -0.15, r)}) {
+    const Eigen::Vector3d ball_in_field = robotToField(obs.pose) * ball_in_robot;
+    world.setBall(ball_in_field, Eigen::Quaterniond::Identity());
+    const RenderOutput out = world.render(NaoCamera::kTop, 640, 480);
+    double sx = 0, sy = 0;
+    int n = 0;
+    for (int y = 0; y < 480; ++y) {
+      for (int x = 0; x < 640; ++x) {
+        if (out.object_map.at(x, y) != kObjectBall) continue;
+        sx += x + 0.5;
+        sy += y + 0.5;
+        ++n;
+      }
+    }
+    ASSERT_GT(n, 50);
+    const Eigen::Vector2d projected = *camera.robotToPixel(ball_in_robot);
+    EXPECT_NEAR(sx / n, projected.x(), 0.5);
+    EXPECT_NEAR(sy / n, projected.y(), 0.5);
+    // Its size is what the camera model expects for a ball on the ground.
+    const double radius_px = *camera.ballRadiusPx(projected, r);
+    EXPECT_NEAR(std::sqrt(n / kPi), radius_px, 0.05 * radius_px);
+  }
+}
+
 TEST(World, CameraSitsInTheHeadAtTheNaoMounts) {
   World world(smallSpec());
   NaoState obs;
