@@ -19,9 +19,10 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kCarpetTexturePx = 1024;
 constexpr double kCarpetTileM = 1.3;
 constexpr int kBallFacePx = 128;
-constexpr double kCarpetGridM = 0.2;    // plane tessellation: per-vertex lighting resolution
-constexpr double kCarpetTopZ = -0.001;  // carpet just below z = 0 so lines sit on top of it
-constexpr double kLineTopZ = 0.0;       // the lines' top is the ground plane the camera model sees
+constexpr double kCarpetGridM = 0.2;          // plane tessellation: per-vertex lighting resolution
+constexpr double kCarpetGridPatchesM = 0.06;  // finer where sun patches need sharp edges
+constexpr double kCarpetTopZ = -0.001;        // carpet just below z = 0 so lines sit on top of it
+constexpr double kLineTopZ = 0.0;  // the lines' top is the ground plane the camera model sees
 // Line boxes reach well below the carpet: their bottom faces then stay clear of the carpet in
 // the shadow map (no shadow acne on the lines).
 constexpr double kLineBottomZ = -0.02;
@@ -123,8 +124,26 @@ class SceneWriter {
 // microseconds on each). Every face has its own four vertices so that it is shaded flat.
 class BoxMesh {
  public:
+  // Boxes longer than this along their first axis are cut into pieces: lighting is computed per
+  // vertex, so a long line needs vertices along it to show light patches.
+  double max_piece_m = 1e9;
+
   // Box at `c` with unit axes (columns, right-handed) and half sizes along them.
   void add(const Eigen::Vector3d& c, const Eigen::Matrix3d& axes, const Eigen::Vector3d& half) {
+    const int pieces = int(std::ceil(2 * half[0] / max_piece_m));
+    if (pieces > 1) {
+      const double piece_half = half[0] / pieces;
+      for (int i = 0; i < pieces; ++i) {
+        const double offset = -half[0] + (2 * i + 1) * piece_half;
+        addOne(c + offset * axes.col(0), axes, Eigen::Vector3d(piece_half, half[1], half[2]));
+      }
+      return;
+    }
+    addOne(c, axes, half);
+  }
+
+ private:
+  void addOne(const Eigen::Vector3d& c, const Eigen::Matrix3d& axes, const Eigen::Vector3d& half) {
     for (int i = 0; i < 3; ++i) {
       const int j = (i + 1) % 3, k = (i + 2) % 3;
       for (double sign : {1.0, -1.0}) {
@@ -143,6 +162,8 @@ class BoxMesh {
       }
     }
   }
+
+ public:
   // A bar of square cross-section between two points.
   void addBar(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double half_width) {
     const Eigen::Vector3d a0 = (p1 - p0).normalized();
@@ -177,12 +198,13 @@ void lineBox(BoxMesh& mesh, const FieldDimensions& fd, double x0, double y0, dou
            Eigen::Vector3d(len / 2 + extend, fd.line_width_m / 2, half_h));
 }
 
-void writeField(SceneWriter& w, const FieldDimensions& fd) {
+void writeField(SceneWriter& w, const FieldDimensions& fd, double grid_m) {
   BoxMesh lines;
+  lines.max_piece_m = 2 * grid_m;
   const double L = fd.halfLength(), W = fd.halfWidth(), hw = fd.line_width_m / 2;
   w.geom(kCarpetPrefix, "plane",
          "pos=\"0 0 " + f(kCarpetTopZ) + "\" size=\"" +
-             f3(fd.carpetHalfLength(), fd.carpetHalfWidth(), kCarpetGridM) + "\"",
+             f3(fd.carpetHalfLength(), fd.carpetHalfWidth(), grid_m) + "\"",
          "carpet");
   lineBox(lines, fd, -L, W, L, W, hw);
   lineBox(lines, fd, -L, -W, L, -W, hw);
@@ -526,7 +548,7 @@ SceneModel buildScene(const SceneSpec& spec) {
   }
 
   writeLights(w, spec, rng);
-  writeField(w, fd);
+  writeField(w, fd, spec.lighting == LightingPreset::kUneven ? kCarpetGridPatchesM : kCarpetGridM);
   writeGoals(w, fd);
   writeHall(w, fd, rng);
   if (spec.ball) {
