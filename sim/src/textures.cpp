@@ -4,8 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "colorfree/perception/error.h"
@@ -290,16 +288,6 @@ GrayTexture hallTexture(HallTexture kind, std::uint64_t seed, int variant, int w
     }
   }
   throw Error("hall texture: unknown kind");
-}
-
-std::vector<std::uint8_t> encodePng(const GrayTexture& texture) {
-  const cv::Mat m(texture.height, texture.width, CV_8UC1,
-                  const_cast<std::uint8_t*>(texture.pixels.data()));
-  std::vector<std::uint8_t> bytes;
-  if (!cv::imencode(".png", m, bytes, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
-    throw Error("texture: PNG encoding failed");
-  }
-  return bytes;
 }
 
 std::vector<std::uint8_t> encodeMujocoCustom(const GrayTexture& texture) {
