@@ -361,6 +361,33 @@ TEST(World, LightingPresetsAndScaleChangeTheBrightness) {
   EXPECT_GT(carpet_mean(bright), normal_mean * 1.4);
 }
 
+TEST(World, TenNaosEachWithItsOwnLabel) {
+  World world(smallSpec(9));
+  NaoState obs;
+  obs.posture.head_pitch = 0.15;
+  world.setObserver(obs);
+  // Nine robots in a row across the view, 2.5 m ahead.
+  for (int i = 0; i < 9; ++i) {
+    NaoState r;
+    r.pose = {2.5, (i - 4) * 0.32, 0.4 * i};
+    r.posture = walkPosture(0.1 * i, 0.1);
+    world.setRobot(i, r);
+  }
+  const RenderOutput out = world.render(NaoCamera::kTop, 320, 240);
+  const CameraModel camera = world.cameraModel(NaoCamera::kTop, 320, 240);
+  for (int i = 0; i < 9; ++i) {
+    // The robot's label at its own place: around its torso's projection.
+    const Eigen::Vector2d torso = *camera.robotToPixel(Eigen::Vector3d(2.5, (i - 4) * 0.32, 0.3));
+    int hits = 0;
+    for (int dy = -3; dy <= 3; ++dy) {
+      for (int dx = -3; dx <= 3; ++dx) {
+        hits += out.object_map.at(int(torso.x()) + dx, int(torso.y()) + dy) == kObjectRobotBase + i;
+      }
+    }
+    EXPECT_GT(hits, 10) << "robot " << i;
+  }
+}
+
 TEST(World, ImpossibleSpecsAndCallsGiveErrors) {
   const auto fails = [](const SceneSpec& spec) { EXPECT_THROW(World w(spec), Error); };
   SceneSpec spec = smallSpec();
