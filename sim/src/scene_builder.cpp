@@ -31,12 +31,11 @@ constexpr double kHallMarginXM = 4.5;  // carpet edge to end wall
 constexpr double kHallMarginYM = 3.5;  // carpet edge to side wall
 constexpr double kHallHeightM = 4.5;
 constexpr int kCircleSegments = 64;
-// Tessellation and shadow map: llvmpipe's vertex work grows with the triangles of every round
-// geom (6 NAOs, nets, people), its fill work with the shadow map's size.
+// Tessellation: llvmpipe's vertex work grows with the triangles of every round geom (NAOs,
+// people).
 constexpr int kRoundSlices = 16;
 constexpr int kRoundStacks = 8;
 constexpr int kBoxQuads = 2;
-constexpr int kShadowMapPx = 2048;
 constexpr double kNetSpacingM = 0.1;
 constexpr double kNetStringRadiusM = 0.004;
 constexpr int kPeople = 12;
@@ -474,6 +473,10 @@ void validateSceneSpec(const SceneSpec& spec) {
     throw Error("scene: off-screen buffer " + std::to_string(spec.max_width_px) + "x" +
                 std::to_string(spec.max_height_px) + " is impossible (16..4096)");
   }
+  if (spec.shadow_map_px < 256 || spec.shadow_map_px > 8192) {
+    throw Error("scene: shadow map " + std::to_string(spec.shadow_map_px) +
+                " px is not in 256..8192");
+  }
   if (!std::isfinite(spec.camera_horizontal_fov_deg) || spec.camera_horizontal_fov_deg < 10 ||
       spec.camera_horizontal_fov_deg > 150) {
     throw Error("scene: camera field of view " + std::to_string(spec.camera_horizontal_fov_deg) +
@@ -568,7 +571,7 @@ SceneModel buildScene(const SceneSpec& spec) {
     << "<visual>\n"
     << "<global offwidth=\"" << spec.max_width_px << "\" offheight=\"" << spec.max_height_px
     << "\"/>\n"
-    << "<quality shadowsize=\"" << kShadowMapPx << "\" offsamples=\"" << spec.multisamples
+    << "<quality shadowsize=\"" << spec.shadow_map_px << "\" offsamples=\"" << spec.multisamples
     << "\" numslices=\"" << kRoundSlices << "\" numstacks=\"" << kRoundStacks << "\" numquads=\""
     << kBoxQuads << "\"/>\n"
     << "<headlight active=\"1\" ambient=\""

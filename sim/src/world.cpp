@@ -262,12 +262,15 @@ World::World(const SceneSpec& spec) : impl_(std::make_unique<Impl>()) {
   w.context_made = true;
   mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   if (w.con.currentBuffer != mjFB_OFFSCREEN) throw Error("world: no off-screen framebuffer");
-  const int samples = m->vis.quality.offsamples;
+  // The object map's context: no MSAA, and the smallest shadow map (it draws no shadows).
+  const int samples = m->vis.quality.offsamples, shadow_px = m->vis.quality.shadowsize;
   m->vis.quality.offsamples = 0;
+  m->vis.quality.shadowsize = 1;
   mjr_defaultContext(&w.con_segment);
   mjr_makeContext(m, &w.con_segment, mjFONTSCALE_100);
   w.segment_context_made = true;
   m->vis.quality.offsamples = samples;
+  m->vis.quality.shadowsize = shadow_px;
   mjr_setBuffer(mjFB_OFFSCREEN, &w.con_segment);
   if (w.con_segment.currentBuffer != mjFB_OFFSCREEN)
     throw Error("world: no off-screen framebuffer");

@@ -408,6 +408,12 @@ TEST(World, ImpossibleSpecsAndCallsGiveErrors) {
   spec = smallSpec();
   spec.multisamples = -1;
   fails(spec);
+  spec = smallSpec();
+  spec.shadow_map_px = 10;
+  fails(spec);
+  spec = smallSpec();
+  spec.camera_horizontal_fov_deg = 200;
+  fails(spec);
 
   World world(smallSpec(1));
   EXPECT_THROW(world.render(NaoCamera::kTop, 1280, 960), Error);

@@ -33,6 +33,7 @@ struct SceneSpec {
   int max_height_px = 480;
   double observer_jersey_gray = 0.5;     ///< 0 black .. 1 white
   double camera_horizontal_fov_deg = 60.9;  ///< horizontal; NAO V4/V5 60.9, V6 56.3
+  int shadow_map_px = 2048;  ///< 4096 halves the shadow edges' steps, costs about 40 % more time
 };
 
 /// NAO joint angles in radians (NAO names and signs; right-side roll joints as on the robot)
