@@ -19,23 +19,23 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kCarpetTexturePx = 1024;
 constexpr double kCarpetTileM = 1.3;
 constexpr int kBallFacePx = 128;
-constexpr double kCarpetGridM = 0.2;       // plane tessellation: per-vertex lighting resolution
-constexpr double kCarpetTopZ = -0.001;     // carpet just below z = 0 so lines sit on top of it
+constexpr double kCarpetGridM = 0.2;          // plane tessellation: per-vertex lighting resolution
+constexpr double kCarpetGridPatchesM = 0.06;  // finer where sun patches need sharp edges
+constexpr double kCarpetTopZ = -0.001;        // carpet just below z = 0 so lines sit on top of it
 constexpr double kLineTopZ = 0.0;  // the lines' top is the ground plane the camera model sees
 // Line boxes reach well below the carpet: their bottom faces then stay clear of the carpet in
 // the shadow map (no shadow acne on the lines).
 constexpr double kLineBottomZ = -0.02;
 constexpr double kFloorZ = -0.004;
-constexpr double kHallMarginXM = 4.5;      // carpet edge to end wall
-constexpr double kHallMarginYM = 3.5;      // carpet edge to side wall
+constexpr double kHallMarginXM = 4.5;  // carpet edge to end wall
+constexpr double kHallMarginYM = 3.5;  // carpet edge to side wall
 constexpr double kHallHeightM = 4.5;
 constexpr int kCircleSegments = 64;
-// Tessellation and shadow map: llvmpipe's vertex work grows with the triangles of every round
-// geom (6 NAOs, nets, people), its fill work with the shadow map's size.
+// Tessellation: llvmpipe's vertex work grows with the triangles of every round geom (NAOs,
+// people).
 constexpr int kRoundSlices = 16;
 constexpr int kRoundStacks = 8;
 constexpr int kBoxQuads = 2;
-constexpr int kShadowMapPx = 2048;
 constexpr double kNetSpacingM = 0.1;
 constexpr double kNetStringRadiusM = 0.004;
 constexpr int kPeople = 12;
@@ -83,8 +83,8 @@ class SceneWriter {
     world << "<geom name=\"" << prefix << geom_count++ << "\" type=\"" << type << "\" " << attrs
           << " material=\"" << material << "\"/>\n";
   }
-  void box(const std::string& prefix, double x, double y, double z, double hx, double hy,
-           double hz, double yaw, const std::string& material) {
+  void box(const std::string& prefix, double x, double y, double z, double hx, double hy, double hz,
+           double yaw, const std::string& material) {
     geom(prefix, "box",
          "pos=\"" + f3(x, y, z) + "\" size=\"" + f3(hx, hy, hz) + "\" euler=\"0 0 " + f(yaw) + "\"",
          material);
@@ -92,12 +92,14 @@ class SceneWriter {
   void capsule(const std::string& prefix, double x0, double y0, double z0, double x1, double y1,
                double z1, double r, const std::string& material) {
     geom(prefix, "capsule",
-         "fromto=\"" + f3(x0, y0, z0) + " " + f3(x1, y1, z1) + "\" size=\"" + f(r) + "\"", material);
+         "fromto=\"" + f3(x0, y0, z0) + " " + f3(x1, y1, z1) + "\" size=\"" + f(r) + "\"",
+         material);
   }
   void cylinder(const std::string& prefix, double x0, double y0, double z0, double x1, double y1,
                 double z1, double r, const std::string& material) {
     geom(prefix, "cylinder",
-         "fromto=\"" + f3(x0, y0, z0) + " " + f3(x1, y1, z1) + "\" size=\"" + f(r) + "\"", material);
+         "fromto=\"" + f3(x0, y0, z0) + " " + f3(x1, y1, z1) + "\" size=\"" + f(r) + "\"",
+         material);
   }
   void light(const Eigen::Vector3d& pos, const Eigen::Vector3d& dir, bool directional, bool shadow,
              double diffuse, double cutoff_deg = 45) {
@@ -121,8 +123,26 @@ class SceneWriter {
 // microseconds on each). Every face has its own four vertices so that it is shaded flat.
 class BoxMesh {
  public:
+  // Boxes longer than this along their first axis are cut into pieces: lighting is computed per
+  // vertex, so a long line needs vertices along it to show light patches.
+  double max_piece_m = 1e9;
+
   // Box at `c` with unit axes (columns, right-handed) and half sizes along them.
   void add(const Eigen::Vector3d& c, const Eigen::Matrix3d& axes, const Eigen::Vector3d& half) {
+    const int pieces = int(std::ceil(2 * half[0] / max_piece_m));
+    if (pieces > 1) {
+      const double piece_half = half[0] / pieces;
+      for (int i = 0; i < pieces; ++i) {
+        const double offset = -half[0] + (2 * i + 1) * piece_half;
+        addOne(c + offset * axes.col(0), axes, Eigen::Vector3d(piece_half, half[1], half[2]));
+      }
+      return;
+    }
+    addOne(c, axes, half);
+  }
+
+ private:
+  void addOne(const Eigen::Vector3d& c, const Eigen::Matrix3d& axes, const Eigen::Vector3d& half) {
     for (int i = 0; i < 3; ++i) {
       const int j = (i + 1) % 3, k = (i + 2) % 3;
       for (double sign : {1.0, -1.0}) {
@@ -141,10 +161,13 @@ class BoxMesh {
       }
     }
   }
+
+ public:
   // A bar of square cross-section between two points.
   void addBar(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double half_width) {
     const Eigen::Vector3d a0 = (p1 - p0).normalized();
-    const Eigen::Vector3d ref = std::abs(a0.z()) > 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d ref =
+        std::abs(a0.z()) > 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d a1 = ref.cross(a0).normalized();
     Eigen::Matrix3d axes;
     axes << a0, a1, a0.cross(a1);
@@ -174,12 +197,13 @@ void lineBox(BoxMesh& mesh, const FieldDimensions& fd, double x0, double y0, dou
            Eigen::Vector3d(len / 2 + extend, fd.line_width_m / 2, half_h));
 }
 
-void writeField(SceneWriter& w, const FieldDimensions& fd) {
+void writeField(SceneWriter& w, const FieldDimensions& fd, double grid_m) {
   BoxMesh lines;
+  lines.max_piece_m = 2 * grid_m;
   const double L = fd.halfLength(), W = fd.halfWidth(), hw = fd.line_width_m / 2;
   w.geom(kCarpetPrefix, "plane",
          "pos=\"0 0 " + f(kCarpetTopZ) + "\" size=\"" +
-             f3(fd.carpetHalfLength(), fd.carpetHalfWidth(), kCarpetGridM) + "\"",
+             f3(fd.carpetHalfLength(), fd.carpetHalfWidth(), grid_m) + "\"",
          "carpet");
   lineBox(lines, fd, -L, W, L, W, hw);
   lineBox(lines, fd, -L, -W, L, -W, hw);
@@ -229,7 +253,8 @@ void writeGoals(SceneWriter& w, const FieldDimensions& fd) {
     // The net: strings on the back, the sides and the roof.
     const double sr = kNetStringRadiusM;
     BoxMesh net;
-    const auto net_string = [&net, sr](double x0, double y0, double z0, double x1, double y1, double z1) {
+    const auto net_string = [&net, sr](double x0, double y0, double z0, double x1, double y1,
+                                       double z1) {
       net.addBar(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1), sr);
     };
     for (double y = -post_y + kNetSpacingM; y < post_y - 1e-6; y += kNetSpacingM) {
@@ -259,11 +284,12 @@ void writePerson(SceneWriter& w, std::mt19937_64& rng, double x, double y, doubl
   for (double s : {-1.0, 1.0}) {
     w.capsule("hall_", 0, s * 0.1 * k, 0.1 * k, 0, s * 0.1 * k, 0.85 * k, 0.075 * k, trousers);
     w.box("hall_", 0.04 * k, s * 0.1 * k, 0.04 * k, 0.13 * k, 0.05 * k, 0.04 * k, 0, "shoe");
-    w.capsule("hall_", 0.02 * k, s * 0.25 * k, 1.4 * k, 0.08 * k, s * 0.27 * k, 0.85 * k,
-              0.05 * k, shirt);
+    w.capsule("hall_", 0.02 * k, s * 0.25 * k, 1.4 * k, 0.08 * k, s * 0.27 * k, 0.85 * k, 0.05 * k,
+              shirt);
   }
   w.box("hall_", 0, 0, 1.15 * k, 0.12 * k, 0.21 * k, 0.3 * k, 0, shirt);
-  w.capsule("hall_", 0, 0, 1.45 * k, 0, 0, 1.52 * k, 0.05 * k, "skin" + std::to_string(int(skin * 3)));
+  w.capsule("hall_", 0, 0, 1.45 * k, 0, 0, 1.52 * k, 0.05 * k,
+            "skin" + std::to_string(int(skin * 3)));
   w.geom("hall_", "ellipsoid",
          "pos=\"" + f3(0, 0, 1.64 * k) + "\" size=\"" + f3(0.1 * k, 0.085 * k, 0.115 * k) + "\"",
          "skin" + std::to_string(int(skin * 3)));
@@ -274,7 +300,8 @@ void writeHall(SceneWriter& w, const FieldDimensions& fd, std::mt19937_64& rng) 
   std::uniform_real_distribution<double> u(0, 1);
   const double cl = fd.carpetHalfLength(), cw = fd.carpetHalfWidth();
   const double hx = cl + kHallMarginXM, hy = cw + kHallMarginYM, hz = kHallHeightM;
-  w.geom("hall_", "plane", "pos=\"0 0 " + f(kFloorZ) + "\" size=\"" + f3(hx, hy, 0.5) + "\"", "floor");
+  w.geom("hall_", "plane", "pos=\"0 0 " + f(kFloorZ) + "\" size=\"" + f3(hx, hy, 0.5) + "\"",
+         "floor");
   // Walls, ceiling.
   w.box("hall_", 0, hy + 0.05, hz / 2, hx, 0.05, hz / 2, 0, "wall0");
   w.box("hall_", 0, -hy - 0.05, hz / 2, hx, 0.05, hz / 2, 0, "wall1");
@@ -283,9 +310,11 @@ void writeHall(SceneWriter& w, const FieldDimensions& fd, std::mt19937_64& rng) 
   w.box("hall_", 0, 0, hz + 0.05, hx, hy, 0.05, 0, "ceiling");
   // Rows of ceiling lamps and windows high on one side wall.
   for (double lx = -hx + 2.5; lx < hx - 1; lx += 4) {
-    for (double ly : {-cw * 0.8, 0.0, cw * 0.8}) w.box("hall_", lx, ly, hz - 0.05, 0.6, 0.15, 0.03, 0, "lamp");
+    for (double ly : {-cw * 0.8, 0.0, cw * 0.8})
+      w.box("hall_", lx, ly, hz - 0.05, 0.6, 0.15, 0.03, 0, "lamp");
   }
-  for (double wx = -hx + 3; wx < hx - 2; wx += 4.5) w.box("hall_", wx, hy - 0.01, hz * 0.72, 1.3, 0.02, 0.7, 0, "window");
+  for (double wx = -hx + 3; wx < hx - 2; wx += 4.5)
+    w.box("hall_", wx, hy - 0.01, hz * 0.72, 1.3, 0.02, 0.7, 0, "window");
   // Sponsor boards behind the goals and along one side.
   for (double s : {-1.0, 1.0}) {
     for (double by : {-1.6, 1.6}) {
@@ -303,7 +332,8 @@ void writeHall(SceneWriter& w, const FieldDimensions& fd, std::mt19937_64& rng) 
     const double y = -(cw + 1.4);
     w.box("hall_", x, y, 0.73, 0.8, 0.4, 0.02, 0, "wood");
     for (double lx : {-0.75, 0.75}) {
-      for (double ly : {-0.35, 0.35}) w.box("hall_", x + lx, y + ly, 0.36, 0.02, 0.02, 0.36, 0, "metal");
+      for (double ly : {-0.35, 0.35})
+        w.box("hall_", x + lx, y + ly, 0.36, 0.02, 0.02, 0.36, 0, "metal");
     }
     for (int k = 0; k < 2; ++k) {
       const double px = x - 0.4 + 0.8 * k + 0.2 * (u(rng) - 0.5);
@@ -341,9 +371,9 @@ void writeLights(SceneWriter& w, const SceneSpec& spec, std::mt19937_64& rng) {
     case LightingPreset::kFlicker:
     case LightingPreset::kDim:
     case LightingPreset::kOverexposed: {
-      const double k = spec.lighting == LightingPreset::kDim ? 0.6
+      const double k = spec.lighting == LightingPreset::kDim           ? 0.6
                        : spec.lighting == LightingPreset::kOverexposed ? 2.0
-                                                                        : 1.0;
+                                                                       : 1.0;
       ambient *= k;
       // Many hall lamps: soft, faint shadows; one lamp casts them, the others fill.
       w.light(V(0.4, -0.3, lamp_z), V(0, 0, -1), false, true, 0.3 * k, 65);
@@ -353,7 +383,8 @@ void writeLights(SceneWriter& w, const SceneSpec& spec, std::mt19937_64& rng) {
     }
     case LightingPreset::kDirectional:
       ambient = 0.5;
-      w.light(V(fd.halfLength() * 0.5, -fd.halfWidth() * 0.5, 4), V(-0.5, 0.4, -0.6), true, true, 1.1);
+      w.light(V(fd.halfLength() * 0.5, -fd.halfWidth() * 0.5, 4), V(-0.5, 0.4, -0.6), true, true,
+              1.1);
       break;
     case LightingPreset::kUneven: {
       ambient = 0.5;
@@ -384,16 +415,21 @@ std::string robotPrefix(int index) {
 void validateSceneSpec(const SceneSpec& spec) {
   const FieldDimensions& fd = spec.field;
   const std::pair<const char*, double> sizes[] = {
-      {"field_length_m", fd.field_length_m}, {"field_width_m", fd.field_width_m},
-      {"line_width_m", fd.line_width_m}, {"border_strip_m", fd.border_strip_m},
+      {"field_length_m", fd.field_length_m},
+      {"field_width_m", fd.field_width_m},
+      {"line_width_m", fd.line_width_m},
+      {"border_strip_m", fd.border_strip_m},
       {"centre_circle_diameter_m", fd.centre_circle_diameter_m},
       {"penalty_area_length_m", fd.penalty_area_length_m},
       {"penalty_area_width_m", fd.penalty_area_width_m},
-      {"goal_area_length_m", fd.goal_area_length_m}, {"goal_area_width_m", fd.goal_area_width_m},
+      {"goal_area_length_m", fd.goal_area_length_m},
+      {"goal_area_width_m", fd.goal_area_width_m},
       {"penalty_mark_distance_m", fd.penalty_mark_distance_m},
       {"penalty_mark_size_m", fd.penalty_mark_size_m},
-      {"goal_inner_width_m", fd.goal_inner_width_m}, {"goal_depth_m", fd.goal_depth_m},
-      {"goal_height_m", fd.goal_height_m}, {"goal_post_diameter_m", fd.goal_post_diameter_m},
+      {"goal_inner_width_m", fd.goal_inner_width_m},
+      {"goal_depth_m", fd.goal_depth_m},
+      {"goal_height_m", fd.goal_height_m},
+      {"goal_post_diameter_m", fd.goal_post_diameter_m},
       {"ball_diameter_m", fd.ball_diameter_m}};
   for (const auto& [name, v] : sizes) {
     if (!std::isfinite(v) || v <= 0 || v > 100) {
@@ -401,12 +437,16 @@ void validateSceneSpec(const SceneSpec& spec) {
                   " is impossible");
     }
   }
-  if (fd.penalty_area_length_m >= fd.halfLength() || fd.goal_area_length_m >= fd.penalty_area_length_m ||
-      fd.penalty_area_width_m >= fd.field_width_m || fd.goal_area_width_m >= fd.penalty_area_width_m ||
-      fd.centre_circle_diameter_m >= fd.field_width_m || fd.line_width_m * 4 >= fd.goal_area_length_m ||
+  if (fd.penalty_area_length_m >= fd.halfLength() ||
+      fd.goal_area_length_m >= fd.penalty_area_length_m ||
+      fd.penalty_area_width_m >= fd.field_width_m ||
+      fd.goal_area_width_m >= fd.penalty_area_width_m ||
+      fd.centre_circle_diameter_m >= fd.field_width_m ||
+      fd.line_width_m * 4 >= fd.goal_area_length_m ||
       fd.penalty_mark_distance_m >= fd.halfLength() || fd.goal_inner_width_m >= fd.field_width_m) {
-    throw Error("scene: field dimensions do not fit together (areas, circle or marks larger than "
-                "the field)");
+    throw Error(
+        "scene: field dimensions do not fit together (areas, circle or marks larger than "
+        "the field)");
   }
   if (spec.robot_count < 0 || spec.robot_count > 9) {
     throw Error("scene: robot_count " + std::to_string(spec.robot_count) +
@@ -432,6 +472,10 @@ void validateSceneSpec(const SceneSpec& spec) {
       spec.max_height_px > 4096) {
     throw Error("scene: off-screen buffer " + std::to_string(spec.max_width_px) + "x" +
                 std::to_string(spec.max_height_px) + " is impossible (16..4096)");
+  }
+  if (spec.shadow_map_px < 256 || spec.shadow_map_px > 8192) {
+    throw Error("scene: shadow map " + std::to_string(spec.shadow_map_px) +
+                " px is not in 256..8192");
   }
   if (!std::isfinite(spec.camera_horizontal_fov_deg) || spec.camera_horizontal_fov_deg < 10 ||
       spec.camera_horizontal_fov_deg > 150) {
@@ -466,10 +510,12 @@ SceneModel buildScene(const SceneSpec& spec) {
   w.texture2d("wood_tex", hallTexture(HallTexture::kWood, s, 0, 256, 256));
   w.texture2d("ceiling_tex", hallTexture(HallTexture::kCeiling, s, 0, 128, 128));
   for (int i = 0; i < kBoardVariants; ++i) {
-    w.texture2d("board" + std::to_string(i) + "_tex", hallTexture(HallTexture::kBoard, s, i, 256, 64));
+    w.texture2d("board" + std::to_string(i) + "_tex",
+                hallTexture(HallTexture::kBoard, s, i, 256, 64));
   }
   for (int i = 0; i < kClothVariants; ++i) {
-    w.texture2d("cloth" + std::to_string(i) + "_tex", hallTexture(HallTexture::kCloth, s, i, 64, 64));
+    w.texture2d("cloth" + std::to_string(i) + "_tex",
+                hallTexture(HallTexture::kCloth, s, i, 64, 64));
   }
   w.material("carpet", "carpet_tex", kCarpetGray, 1 / kCarpetTileM);
   // Lines are flat white: where two line boxes overlap (corners, crossings, circle chords) their
@@ -505,7 +551,7 @@ SceneModel buildScene(const SceneSpec& spec) {
   }
 
   writeLights(w, spec, rng);
-  writeField(w, fd);
+  writeField(w, fd, spec.lighting == LightingPreset::kUneven ? kCarpetGridPatchesM : kCarpetGridM);
   writeGoals(w, fd);
   writeHall(w, fd, rng);
   if (spec.ball) {
@@ -523,11 +569,13 @@ SceneModel buildScene(const SceneSpec& spec) {
     << "<compiler angle=\"radian\"/>\n"
     << "<option gravity=\"0 0 0\"/>\n"
     << "<visual>\n"
-    << "<global offwidth=\"" << spec.max_width_px << "\" offheight=\"" << spec.max_height_px << "\"/>\n"
-    << "<quality shadowsize=\"" << kShadowMapPx << "\" offsamples=\"" << spec.multisamples
-    << "\" numslices=\"" << kRoundSlices << "\" numstacks=\"" << kRoundStacks << "\" numquads=\"" << kBoxQuads << "\"/>\n"
-    << "<headlight active=\"1\" ambient=\"" << f3(w.model.headlight_ambient, w.model.headlight_ambient,
-                                                  w.model.headlight_ambient)
+    << "<global offwidth=\"" << spec.max_width_px << "\" offheight=\"" << spec.max_height_px
+    << "\"/>\n"
+    << "<quality shadowsize=\"" << spec.shadow_map_px << "\" offsamples=\"" << spec.multisamples
+    << "\" numslices=\"" << kRoundSlices << "\" numstacks=\"" << kRoundStacks << "\" numquads=\""
+    << kBoxQuads << "\"/>\n"
+    << "<headlight active=\"1\" ambient=\""
+    << f3(w.model.headlight_ambient, w.model.headlight_ambient, w.model.headlight_ambient)
     << "\" diffuse=\"0 0 0\" specular=\"0 0 0\"/>\n"
     // Near clip 3 cm so that the bottom camera sees the own chest and feet, while the depth
     // buffer still separates lines and carpet (1 mm) 10 m away; shadows of the directional light

@@ -57,8 +57,7 @@ void BM_Render(benchmark::State& state) {
     benchmark::DoNotOptimize(world.render(camera, width, height, object_map));
   }
   static const char* const kQuality[] = {"plain", "shadows", "msaa4", "shadows+msaa4"};
-  state.SetLabel(std::string(kQuality[state.range(2) & 3]) +
-                 (object_map ? "+objectmap" : ""));
+  state.SetLabel(std::string(kQuality[state.range(2) & 3]) + (object_map ? "+objectmap" : ""));
 }
 BENCHMARK(BM_Render)
     ->ArgNames({"w", "h", "quality", "objmap"})

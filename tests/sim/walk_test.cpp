@@ -55,3 +55,23 @@ TEST(WalkPosture, NonFiniteInputIsAnError) {
 
 }  // namespace
 }  // namespace colorfree::sim
+
+namespace colorfree::sim {
+namespace {
+
+TEST(FlickerScale, IsSeededVariesOverFramesAndStaysInRange) {
+  double lo = 10, hi = -10;
+  for (int frame = 0; frame < 200; ++frame) {
+    const double k = flickerScale(5, frame);
+    EXPECT_EQ(k, flickerScale(5, frame));
+    lo = std::min(lo, k);
+    hi = std::max(hi, k);
+  }
+  EXPECT_GE(lo, 0.35);
+  EXPECT_LE(hi, 1.1);
+  EXPECT_GT(hi - lo, 0.3);
+  EXPECT_NE(flickerScale(5, 3), flickerScale(6, 3));
+}
+
+}  // namespace
+}  // namespace colorfree::sim

@@ -41,7 +41,8 @@ struct LineRect {
 // The field's lines from the rule book, written here independently of the scene builder.
 bool onFieldLine(const FieldDimensions& fd, const Eigen::Vector2d& p) {
   const double L = fd.halfLength(), W = fd.halfWidth(), h = fd.line_width_m / 2;
-  std::vector<LineRect> rects = {{{-L, W}, {L, W}, h}, {{-L, -W}, {L, -W}, h}, {{0, -W}, {0, W}, h}};
+  std::vector<LineRect> rects = {
+      {{-L, W}, {L, W}, h}, {{-L, -W}, {L, -W}, h}, {{0, -W}, {0, W}, h}};
   for (double s : {-1.0, 1.0}) {
     const double pa = s * (L - fd.penalty_area_length_m), pw = fd.penalty_area_width_m / 2;
     const double ga = s * (L - fd.goal_area_length_m), gw = fd.goal_area_width_m / 2;
@@ -125,12 +126,14 @@ void expectLinesWhereProjected(World& world, const FieldPose& observer, NaoCamer
   const LineCheck c = checkLines(out, model, observer, fd);
   EXPECT_GT(c.compared, w * h / 4);
   EXPECT_GT(c.line_pixels, w * h / 800) << "too few line pixels to check the projection";
-  EXPECT_EQ(c.wrong, 0) << "pixels more than a pixel away from where the camera model puts the lines";
+  EXPECT_EQ(c.wrong, 0)
+      << "pixels more than a pixel away from where the camera model puts the lines";
   // The check sees a camera model that is off by two pixels.
   CameraIntrinsics shifted = model.intrinsics();
   shifted.center_x_px += 2;
   shifted.center_y_px += 2;
-  EXPECT_GE(checkLines(out, CameraModel(shifted, model.cameraToRobot()), observer, fd, 50).wrong, 50);
+  EXPECT_GE(checkLines(out, CameraModel(shifted, model.cameraToRobot()), observer, fd, 50).wrong,
+            50);
 }
 
 TEST(World, FieldLinesLandWhereTheCameraModelProjectsThem) {
@@ -153,6 +156,42 @@ TEST(World, FieldLinesLandWhereTheCameraModelProjectsThem) {
   world.setObserver(obs);
   expectLinesWhereProjected(world, obs.pose, NaoCamera::kTop, spec.field, 640, 480);
   expectLinesWhereProjected(world, obs.pose, NaoCamera::kTop, spec.field, 320, 240);
+}
+
+TEST(World, BallIsRenderedWhereTheCameraModelProjectsIt) {
+  const SceneSpec spec = smallSpec();
+  World world(spec);
+  NaoState obs;
+  obs.pose = {-0.5, 0.3, 0.2};
+  obs.posture.head_pitch = 0.25;
+  world.setObserver(obs);
+  const CameraModel camera = world.cameraModel(NaoCamera::kTop, 640, 480);
+  const double r = spec.field.ballRadius();
+  // Near the image centre a small sphere's silhouette is centred on its projected centre.
+  for (const Eigen::Vector3d& ball_in_robot :
+       {Eigen::Vector3d(1.4, 0.0, r), Eigen::Vector3d(1.2, 0.1, r),
+        Eigen::Vector3d(2.0, -0.15, r)}) {
+    const Eigen::Vector3d ball_in_field = robotToField(obs.pose) * ball_in_robot;
+    world.setBall(ball_in_field, Eigen::Quaterniond::Identity());
+    const RenderOutput out = world.render(NaoCamera::kTop, 640, 480);
+    double sx = 0, sy = 0;
+    int n = 0;
+    for (int y = 0; y < 480; ++y) {
+      for (int x = 0; x < 640; ++x) {
+        if (out.object_map.at(x, y) != kObjectBall) continue;
+        sx += x + 0.5;
+        sy += y + 0.5;
+        ++n;
+      }
+    }
+    ASSERT_GT(n, 50);
+    const Eigen::Vector2d projected = *camera.robotToPixel(ball_in_robot);
+    EXPECT_NEAR(sx / n, projected.x(), 0.5);
+    EXPECT_NEAR(sy / n, projected.y(), 0.5);
+    // Its size is what the camera model expects for a ball on the ground.
+    const double radius_px = *camera.ballRadiusPx(projected, r);
+    EXPECT_NEAR(std::sqrt(n / kPi), radius_px, 0.05 * radius_px);
+  }
 }
 
 TEST(World, CameraSitsInTheHeadAtTheNaoMounts) {
@@ -249,7 +288,8 @@ TEST(World, RobotTurnedBy90DegreesLooksDifferentAtTheFeet) {
   const FeetView back = renderFeet(world, 0, top, bottom);
   const FeetView front_again = renderFeet(world, kPi, top, bottom);
   ASSERT_GT(front.pixels, 200);
-  const auto differing = [](const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  const auto differing = [](const std::vector<std::uint8_t>& a,
+                            const std::vector<std::uint8_t>& b) {
     int n = 0;
     for (std::size_t i = 0; i < a.size(); ++i) n += a[i] != b[i] ? 1 : 0;
     return n;
@@ -321,10 +361,35 @@ TEST(World, LightingPresetsAndScaleChangeTheBrightness) {
   EXPECT_GT(carpet_mean(bright), normal_mean * 1.4);
 }
 
+TEST(World, TenNaosEachWithItsOwnLabel) {
+  World world(smallSpec(9));
+  NaoState obs;
+  obs.posture.head_pitch = 0.15;
+  world.setObserver(obs);
+  // Nine robots in a row across the view, 2.5 m ahead.
+  for (int i = 0; i < 9; ++i) {
+    NaoState r;
+    r.pose = {2.5, (i - 4) * 0.32, 0.4 * i};
+    r.posture = walkPosture(0.1 * i, 0.1);
+    world.setRobot(i, r);
+  }
+  const RenderOutput out = world.render(NaoCamera::kTop, 320, 240);
+  const CameraModel camera = world.cameraModel(NaoCamera::kTop, 320, 240);
+  for (int i = 0; i < 9; ++i) {
+    // The robot's label at its own place: around its torso's projection.
+    const Eigen::Vector2d torso = *camera.robotToPixel(Eigen::Vector3d(2.5, (i - 4) * 0.32, 0.3));
+    int hits = 0;
+    for (int dy = -3; dy <= 3; ++dy) {
+      for (int dx = -3; dx <= 3; ++dx) {
+        hits += out.object_map.at(int(torso.x()) + dx, int(torso.y()) + dy) == kObjectRobotBase + i;
+      }
+    }
+    EXPECT_GT(hits, 10) << "robot " << i;
+  }
+}
+
 TEST(World, ImpossibleSpecsAndCallsGiveErrors) {
-  const auto fails = [](const SceneSpec& spec) {
-    EXPECT_THROW(World w(spec), Error);
-  };
+  const auto fails = [](const SceneSpec& spec) { EXPECT_THROW(World w(spec), Error); };
   SceneSpec spec = smallSpec();
   spec.robot_count = 10;
   fails(spec);
@@ -343,6 +408,12 @@ TEST(World, ImpossibleSpecsAndCallsGiveErrors) {
   spec = smallSpec();
   spec.multisamples = -1;
   fails(spec);
+  spec = smallSpec();
+  spec.shadow_map_px = 10;
+  fails(spec);
+  spec = smallSpec();
+  spec.camera_horizontal_fov_deg = 200;
+  fails(spec);
 
   World world(smallSpec(1));
   EXPECT_THROW(world.render(NaoCamera::kTop, 1280, 960), Error);
@@ -356,7 +427,8 @@ TEST(World, ImpossibleSpecsAndCallsGiveErrors) {
 
 TEST(MjcfLoader, ModelsMujocoRejectsGiveErrorsWithItsMessage) {
   try {
-    loadMjcf("<mujoco><worldbody><geom type=\"sphere\" size=\"-1\"/></worldbody>", {}, "broken.xml");
+    loadMjcf("<mujoco><worldbody><geom type=\"sphere\" size=\"-1\"/></worldbody>", {},
+             "broken.xml");
     FAIL() << "a truncated model was accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("broken.xml"), std::string::npos) << e.what();
