@@ -14,16 +14,18 @@
 
 namespace colorfree::cnn::detail {
 
+// One native vector register per Vec: 16 floats with AVX-512, 8 with AVX, 4 with SSE.
+#if defined(__AVX512F__)
 inline constexpr int kLanes = 16;
+#elif defined(__AVX__)
+inline constexpr int kLanes = 8;
+#else
+inline constexpr int kLanes = 4;
+#endif
 typedef float Vec __attribute__((vector_size(kLanes * sizeof(float))));
 
-#if defined(__AVX512F__)
-inline constexpr int kBlock = 8;  // output channels per register block (32 vector registers)
-#elif defined(__AVX__)
-inline constexpr int kBlock = 4;  // 16 ymm registers, a Vec takes two
-#else
-inline constexpr int kBlock = 2;  // 16 xmm registers, a Vec takes four
-#endif
+// Output channels per register block: 8 accumulators fit beside the operands in 16 registers.
+inline constexpr int kBlock = 8;
 
 inline Vec splat(float v) {
   const Vec zero = {};
@@ -34,6 +36,20 @@ inline Vec activate(Vec v, Activation a) {
   if (a == Activation::kLeaky) return v > 0.0f ? v : v * kLeakySlope;
   return v;
 }
+
+// With AVX a multiply-add broadcasts a scalar weight from memory for free; SSE has no such
+// operand, so there the packed weights are stored already broadcast, one Vec per weight.
+#if defined(__AVX__)
+inline constexpr int kWeightWidth = 1;
+inline Vec weight(const float* p) { return splat(*p); }
+#else
+inline constexpr int kWeightWidth = kLanes;
+inline Vec weight(const float* p) {
+  Vec v;
+  std::memcpy(&v, p, sizeof(Vec));
+  return v;
+}
+#endif
 
 /// Weights reordered for the loops: convolution [o][ky][kx][c]; connected [o][y][x][c].
 void packWeights(const Layer& l, const float* params, float* packed);
@@ -56,13 +72,13 @@ inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, c
   for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
   for (int ky = ky0; ky < ky1; ++ky) {
     const Vec* row = in + (static_cast<std::size_t>(iy0 + ky) * Win + ix0) * C;
-    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB;
+    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
     for (int kx = kx0; kx < kx1; ++kx) {
       const Vec* px = row + kx * C;
-      const float* wk = wrow + kx * C * NB;
+      const float* wk = wrow + kx * C * NB * kWeightWidth;
       for (int c = 0; c < C; ++c) {
         const Vec v = px[c];
-        for (int j = 0; j < NB; ++j) acc[j] += wk[c * NB + j] * v;
+        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + (c * NB + j) * kWeightWidth) * v;
       }
     }
   }
@@ -72,7 +88,7 @@ template <int NB>
 inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
                       Vec* out) {
   const int O = l.out.channels;
-  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels;
+  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   for (int oy = 0; oy < l.out.height; ++oy) {
     for (int ox = 0; ox < l.out.width; ++ox) {
       Vec acc[NB];
@@ -89,7 +105,7 @@ template <int NB>
 inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, const float* bias,
                           int o0, const Vec* in, Vec* out) {
   const int O = l.out.channels;
-  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels;
+  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   const int off = -pool.pad / 2;
   for (int py = 0; py < pool.out.height; ++py) {
     const int cy0 = py * pool.stride + off;
@@ -118,10 +134,10 @@ inline void connectedBlock(const Layer& l, const float* w, const float* bias, in
   const int n = l.in.size();
   Vec acc[NB];
   for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
-  const float* wb = w + static_cast<std::size_t>(o0) * n;
+  const float* wb = w + static_cast<std::size_t>(o0) * n * kWeightWidth;
   for (int i = 0; i < n; ++i) {
     const Vec v = in[i];
-    for (int j = 0; j < NB; ++j) acc[j] += wb[i * NB + j] * v;
+    for (int j = 0; j < NB; ++j) acc[j] += weight(wb + (i * NB + j) * kWeightWidth) * v;
   }
   for (int j = 0; j < NB; ++j) out[o0 + j] = activate(acc[j], l.activation);
 }

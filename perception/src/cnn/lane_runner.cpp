@@ -9,26 +9,26 @@ void packWeights(const Layer& l, const float* params, float* packed) {
     const int nb = std::min(kBlock, O - o0);
     if (l.type == LayerType::kConvolution) {
       const int C = l.in.channels, K = l.size;
-      float* block = packed + static_cast<std::size_t>(o0) * K * K * C;
+      float* block = packed + static_cast<std::size_t>(o0) * K * K * C * kWeightWidth;
       for (int j = 0; j < nb; ++j) {
         for (int c = 0; c < C; ++c) {
           for (int ky = 0; ky < K; ++ky) {
             for (int kx = 0; kx < K; ++kx) {
-              block[((static_cast<std::size_t>(ky) * K + kx) * C + c) * nb + j] =
-                  w[((static_cast<std::size_t>(o0 + j) * C + c) * K + ky) * K + kx];
+              float* dst = block + (((static_cast<std::size_t>(ky) * K + kx) * C + c) * nb + j) * kWeightWidth;
+              std::fill(dst, dst + kWeightWidth, w[((static_cast<std::size_t>(o0 + j) * C + c) * K + ky) * K + kx]);
             }
           }
         }
       }
     } else if (l.type == LayerType::kConnected) {
       const int C = l.in.channels, H = l.in.height, W = l.in.width, n = l.in.size();
-      float* block = packed + static_cast<std::size_t>(o0) * n;
+      float* block = packed + static_cast<std::size_t>(o0) * n * kWeightWidth;
       for (int j = 0; j < nb; ++j) {
         for (int c = 0; c < C; ++c) {
           for (int y = 0; y < H; ++y) {
             for (int x = 0; x < W; ++x) {
-              block[static_cast<std::size_t>((y * W + x) * C + c) * nb + j] =
-                  w[static_cast<std::size_t>(o0 + j) * n + (c * H + y) * W + x];
+              float* dst = block + (static_cast<std::size_t>((y * W + x) * C + c) * nb + j) * kWeightWidth;
+              std::fill(dst, dst + kWeightWidth, w[static_cast<std::size_t>(o0 + j) * n + (c * H + y) * W + x]);
             }
           }
         }
@@ -47,7 +47,7 @@ LaneRunner::LaneRunner(const Net& net, bool fuse) : net_(net) {
   for (std::size_t i = 0; i < layers.size(); ++i) {
     const Layer& l = layers[i];
     outputs_[i].assign(l.out.size(), splat(0.0f));
-    if (l.param_count > 0) packed_[i].assign(l.param_count - l.filters, 0.0f);
+    if (l.param_count > 0) packed_[i].assign((l.param_count - l.filters) * kWeightWidth, 0.0f);
   }
   for (std::size_t i = 0; i < layers.size(); ++i) {
     for (int j : layers[i].inputs) {

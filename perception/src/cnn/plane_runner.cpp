@@ -33,8 +33,8 @@ void convPlanes(int C, int K, const int* offsets, const float* const* planes, co
       const float* src = planes[c] + t * kLanes;
       for (int k = 0; k < K * K; ++k) {
         const Vec v = loadu(src + offsets[k]);
-        for (int j = 0; j < NB; ++j) acc[j] += wk[j] * v;
-        wk += NB;
+        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + j * kWeightWidth) * v;
+        wk += NB * kWeightWidth;
       }
     }
     for (int j = 0; j < NB; ++j) {
@@ -47,7 +47,7 @@ template <int NB>
 struct ConvPlanesRun {
   static void run(int o, int C, int K, const int* offsets, const float* const* planes,
                   const float* w, const float* bias, int vectors, int scratch_stride, float* scratch) {
-    convPlanes<NB>(C, K, offsets, planes, w + static_cast<std::size_t>(o) * C * K * K, bias + o,
+    convPlanes<NB>(C, K, offsets, planes, w + static_cast<std::size_t>(o) * C * K * K * kWeightWidth, bias + o,
                    vectors, scratch_stride, scratch + static_cast<std::size_t>(o) * scratch_stride);
   }
 };
@@ -116,7 +116,7 @@ PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
       outputs_[i] = makeTensor(l.out.height, l.out.width, l.out.channels);
     }
     if (l.type == LayerType::kConvolution) {
-      packed_[i].assign(l.param_count - l.filters, 0.0f);
+      packed_[i].assign((l.param_count - l.filters) * kWeightWidth, 0.0f);
       const int in_stride = l.in.width + 2 * margin_;
       const int vectors = (l.out.height * in_stride + kLanes - 1) / kLanes;
       scratch = std::max(scratch, static_cast<std::size_t>(vectors) * kLanes * l.filters);
@@ -161,12 +161,12 @@ void PlaneRunner::repack() {
     const int C = l.in.channels, K = l.size, O = l.filters;
     for (int o0 = 0; o0 < O; o0 += kBlock) {
       const int nb = std::min(kBlock, O - o0);
-      float* block = packed_[i].data() + static_cast<std::size_t>(o0) * C * K * K;
+      float* block = packed_[i].data() + static_cast<std::size_t>(o0) * C * K * K * kWeightWidth;
       for (int j = 0; j < nb; ++j) {
         for (int c = 0; c < C; ++c) {
           for (int k = 0; k < K * K; ++k) {
-            block[(static_cast<std::size_t>(c) * K * K + k) * nb + j] =
-                w[(static_cast<std::size_t>(o0 + j) * C + c) * K * K + k];
+            float* dst = block + ((static_cast<std::size_t>(c) * K * K + k) * nb + j) * kWeightWidth;
+            std::fill(dst, dst + kWeightWidth, w[(static_cast<std::size_t>(o0 + j) * C + c) * K * K + k]);
           }
         }
       }
