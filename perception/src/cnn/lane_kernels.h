@@ -27,9 +27,10 @@ typedef float Vec __attribute__((vector_size(kLanes * sizeof(float))));
 // Output channels per register block: 8 accumulators fit beside the operands in 16 registers.
 inline constexpr int kBlock = 8;
 
+// v − 0 is v for every float (v + 0 is not, for −0), so this folds into a plain broadcast.
 inline Vec splat(float v) {
   const Vec zero = {};
-  return zero + v;
+  return v - zero;
 }
 
 inline Vec activate(Vec v, Activation a) {
@@ -84,10 +85,10 @@ inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, c
   }
 }
 
+// `out` may be a slice of a wider buffer (a route's concatenation): `O` channels per pixel.
 template <int NB>
 inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
-                      Vec* out) {
-  const int O = l.out.channels;
+                      Vec* out, int O) {
   const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   for (int oy = 0; oy < l.out.height; ++oy) {
     for (int ox = 0; ox < l.out.width; ++ox) {
@@ -103,8 +104,7 @@ inline void convBlock(const Layer& l, const float* w, const float* bias, int o0,
 // activation is monotonic, so the maximum of the pre-activations is taken and activated once.
 template <int NB>
 inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, const float* bias,
-                          int o0, const Vec* in, Vec* out) {
-  const int O = l.out.channels;
+                          int o0, const Vec* in, Vec* out, int O) {
   const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   const int off = -pool.pad / 2;
   for (int py = 0; py < pool.out.height; ++py) {
@@ -160,15 +160,16 @@ inline void forBlocks(int count, Args&&... args) {
 
 template <int NB>
 struct ConvRun {
-  static void run(int o, const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
-    convBlock<NB>(l, w, b, o, in, out);
+  static void run(int o, const Layer& l, const float* w, const float* b, const Vec* in, Vec* out,
+                  int out_stride) {
+    convBlock<NB>(l, w, b, o, in, out, out_stride);
   }
 };
 template <int NB>
 struct ConvPoolRun {
   static void run(int o, const Layer& l, const Layer& pool, const float* w, const float* b,
-                  const Vec* in, Vec* out) {
-    convPoolBlock<NB>(l, pool, w, b, o, in, out);
+                  const Vec* in, Vec* out, int out_stride) {
+    convPoolBlock<NB>(l, pool, w, b, o, in, out, out_stride);
   }
 };
 template <int NB>
@@ -178,13 +179,14 @@ struct ConnectedRun {
   }
 };
 
-inline void convForward(const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
-  forBlocks<ConvRun>(l.out.channels, l, w, b, in, out);
+inline void convForward(const Layer& l, const float* w, const float* b, const Vec* in, Vec* out,
+                        int out_stride) {
+  forBlocks<ConvRun>(l.out.channels, l, w, b, in, out, out_stride);
 }
 
 inline void convPoolForward(const Layer& l, const Layer& pool, const float* w, const float* b,
-                            const Vec* in, Vec* out) {
-  forBlocks<ConvPoolRun>(l.out.channels, l, pool, w, b, in, out);
+                            const Vec* in, Vec* out, int out_stride) {
+  forBlocks<ConvPoolRun>(l.out.channels, l, pool, w, b, in, out, out_stride);
 }
 
 inline void connectedForward(const Layer& l, const float* w, const float* b, const Vec* in,
@@ -193,7 +195,7 @@ inline void connectedForward(const Layer& l, const float* w, const float* b, con
 }
 
 // Darknet's max pool: windows start at -padding/2; values outside the input are ignored.
-inline void maxPoolForward(const Layer& l, const Vec* in, Vec* out) {
+inline void maxPoolForward(const Layer& l, const Vec* in, Vec* out, int out_stride) {
   const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
   const int off = -l.pad / 2;
   for (int oy = 0; oy < l.out.height; ++oy) {
@@ -202,7 +204,7 @@ inline void maxPoolForward(const Layer& l, const Vec* in, Vec* out) {
     for (int ox = 0; ox < l.out.width; ++ox) {
       const int ix0 = ox * l.stride + off;
       const int x0 = std::max(0, ix0), x1 = std::min(Win, ix0 + l.size);
-      Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * C;
+      Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * out_stride;
       for (int c = 0; c < C; ++c) po[c] = splat(-std::numeric_limits<float>::infinity());
       for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {

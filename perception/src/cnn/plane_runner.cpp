@@ -17,6 +17,16 @@ inline Vec loadu(const float* p) {
   return v;
 }
 
+typedef int IVec __attribute__((vector_size(kLanes * sizeof(int))));
+
+IVec stepMask(int first) {
+  IVec m;
+  for (int i = 0; i < kLanes; ++i) m[i] = first + 2 * i;
+  return m;
+}
+const IVec kEven = stepMask(0);
+const IVec kOdd = stepMask(1);
+
 inline float activateScalar(float v, Activation a) {
   return a == Activation::kLeaky && v < 0.0f ? v * kLeakySlope : v;
 }
@@ -64,9 +74,18 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
       const float* r0 = src + static_cast<std::size_t>(y0) * stride;
       const float* r1 = r0 + stride;
       const int full = std::min(pool.out.width, w / 2);
-      for (int ox = 0; ox < full; ++ox) {
-        const float m = std::max(std::max(r0[2 * ox], r0[2 * ox + 1]), std::max(r1[2 * ox], r1[2 * ox + 1]));
-        out[ox] = activateScalar(m, a);
+      int ox = 0;
+      // kLanes outputs at a time: even and odd columns of two rows, by shuffles. Reads may run
+      // past the row (into the margin or the slack); the extra results are not stored.
+      for (; ox < full; ox += kLanes) {
+        const Vec a0 = loadu(r0 + 2 * ox), a1 = loadu(r0 + 2 * ox + kLanes);
+        const Vec b0 = loadu(r1 + 2 * ox), b1 = loadu(r1 + 2 * ox + kLanes);
+        const Vec ra = __builtin_shuffle(a0, a1, kEven), rb = __builtin_shuffle(a0, a1, kOdd);
+        const Vec sa = __builtin_shuffle(b0, b1, kEven), sb = __builtin_shuffle(b0, b1, kOdd);
+        Vec m = ra > rb ? ra : rb;
+        const Vec n = sa > sb ? sa : sb;
+        m = activate(m > n ? m : n, a);
+        std::memcpy(out + ox, &m, sizeof(float) * std::min(kLanes, full - ox));
       }
       for (int ox = full; ox < pool.out.width; ++ox) {
         float m = -std::numeric_limits<float>::infinity();
@@ -122,7 +141,7 @@ PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
       scratch = std::max(scratch, static_cast<std::size_t>(vectors) * kLanes * l.filters);
     }
   }
-  scratch_.assign(scratch, 0.0f);
+  scratch_.assign(scratch + 4 * kLanes, 0.0f);  // slack for the pooling's vector reads
   fused_.assign(layers.size(), false);
   std::vector<bool> routed(layers.size(), false);
   for (const Layer& l : layers) {
