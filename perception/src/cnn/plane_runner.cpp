@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "colorfree/perception/error.h"
 #include "lane_kernels.h"
 
 namespace colorfree::cnn::detail {
@@ -32,9 +33,12 @@ inline float activateScalar(float v, Activation a) {
 }
 
 // Sums of NB output channels over `vectors` × kLanes flattened positions; see the header.
+// Sums of NB output channels over `vectors` × kLanes flattened positions; see the header.
+// Without `mask`: raw sums into dst[j]. With it: activated, multiplied by the mask (0 on
+// positions that fall into margin columns, so the margins stay zero), into dst[j].
 template <int NB>
 void convPlanes(int C, int K, const int* offsets, const float* const* planes, const float* w,
-                const float* bias, int vectors, int scratch_stride, float* scratch) {
+                const float* bias, int vectors, float* const* dst, const float* mask, Activation a) {
   for (int t = 0; t < vectors; ++t) {
     Vec acc[NB];
     for (int j = 0; j < NB; ++j) acc[j] = splat(bias[j]);
@@ -47,18 +51,21 @@ void convPlanes(int C, int K, const int* offsets, const float* const* planes, co
         wk += NB * kWeightWidth;
       }
     }
-    for (int j = 0; j < NB; ++j) {
-      std::memcpy(scratch + static_cast<std::size_t>(j) * scratch_stride + t * kLanes, &acc[j], sizeof(Vec));
+    if (mask != nullptr) {
+      const Vec m = loadu(mask + t * kLanes);
+      for (int j = 0; j < NB; ++j) acc[j] = activate(acc[j], a) * m;
     }
+    for (int j = 0; j < NB; ++j) std::memcpy(dst[j] + t * kLanes, &acc[j], sizeof(Vec));
   }
 }
 
 template <int NB>
 struct ConvPlanesRun {
   static void run(int o, int C, int K, const int* offsets, const float* const* planes,
-                  const float* w, const float* bias, int vectors, int scratch_stride, float* scratch) {
-    convPlanes<NB>(C, K, offsets, planes, w + static_cast<std::size_t>(o) * C * K * K * kWeightWidth, bias + o,
-                   vectors, scratch_stride, scratch + static_cast<std::size_t>(o) * scratch_stride);
+                  const float* w, const float* bias, int vectors, float* const* dst,
+                  const float* mask, Activation a) {
+    convPlanes<NB>(C, K, offsets, planes, w + static_cast<std::size_t>(o) * C * K * K * kWeightWidth,
+                   bias + o, vectors, dst + o, mask, a);
   }
 };
 
@@ -112,6 +119,11 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
 PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
   const auto& layers = net.layers();
   for (const Layer& l : layers) {
+    if (l.type == LayerType::kConvolution && l.filters > kMaxChannels) {
+      throw Error("cnn: a convolution with more than " + std::to_string(kMaxChannels) + " filters");
+    }
+  }
+  for (const Layer& l : layers) {
     if (l.type == LayerType::kConvolution) {
       margin_ = std::max(margin_, l.pad);
     }
@@ -142,6 +154,20 @@ PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
     }
   }
   scratch_.assign(scratch + 4 * kLanes, 0.0f);  // slack for the pooling's vector reads
+  masks_.resize(layers.size());
+  for (std::size_t i = 0; i < layers.size(); ++i) {
+    const Layer& l = layers[i];
+    if (l.type != LayerType::kConvolution || l.stride != 1 || !(l.out.height == l.in.height) ||
+        !(l.out.width == l.in.width)) {
+      continue;
+    }
+    const int stride = l.in.width + 2 * margin_;
+    const int vectors = (l.out.height * stride + kLanes - 1) / kLanes;
+    masks_[i].assign(static_cast<std::size_t>(vectors) * kLanes, 0.0f);
+    for (int t = 0; t < vectors * kLanes; ++t) {
+      masks_[i][t] = (t % stride < l.out.width && t / stride < l.out.height) ? 1.0f : 0.0f;
+    }
+  }
   fused_.assign(layers.size(), false);
   std::vector<bool> routed(layers.size(), false);
   for (const Layer& l : layers) {
@@ -162,7 +188,8 @@ PlaneRunner::Tensor PlaneRunner::makeTensor(int height, int width, int channels)
   t.width = width;
   t.stride = width + 2 * margin_;
   t.rows = height + 2 * margin_;
-  const std::size_t plane = static_cast<std::size_t>(t.rows) * t.stride;
+  // A gap after every plane takes the masked zeros a vector writes past a plane's end.
+  const std::size_t plane = static_cast<std::size_t>(t.rows) * t.stride + 2 * kLanes + margin_;
   // Slack after the last plane: a vector of flattened positions may read past the valid rows.
   const std::size_t slack = static_cast<std::size_t>(4 * margin_ + 8) * t.stride + 4 * kLanes;
   storage_.emplace_back(plane * channels + slack, 0.0f);
@@ -232,8 +259,18 @@ void PlaneRunner::conv(int i, const Tensor& in, Tensor& out) {
   // Planes start at their corner (the margin included): position t = y * stride + x.
   const float* const* planes = in.planes.data();
   const float* bias = net_.params().data() + l.param_offset;
-  forBlocks<ConvPlanesRun>(l.filters, l.in.channels, K, offsets, planes, packed_[i].data(), bias,
-                           vectors, scratch_stride, scratch_.data());
+  float* dst[kMaxChannels];
+  if (fused_[i] || masks_[i].empty()) {
+    for (int o = 0; o < l.filters; ++o) dst[o] = scratch_.data() + static_cast<std::size_t>(o) * scratch_stride;
+    forBlocks<ConvPlanesRun>(l.filters, l.in.channels, K, offsets, planes, packed_[i].data(), bias,
+                             vectors, dst, nullptr, l.activation);
+  } else {
+    // Same plane size in and out: position t of the input is position t of the output.
+    for (int o = 0; o < l.filters; ++o) dst[o] = valueAt(out, o, 0, 0);
+    forBlocks<ConvPlanesRun>(l.filters, l.in.channels, K, offsets, planes, packed_[i].data(), bias,
+                             vectors, dst, masks_[i].data(), l.activation);
+    return;
+  }
   if (fused_[i]) {
     // Straight from the sums into the max pool's output: activation after the maximum.
     const Layer& pool = net_.layers()[i + 1];
@@ -248,8 +285,8 @@ void PlaneRunner::conv(int i, const Tensor& in, Tensor& out) {
     const float* src = scratch_.data() + static_cast<std::size_t>(o) * scratch_stride;
     for (int y = 0; y < l.out.height; ++y) {
       const float* row = src + static_cast<std::size_t>(y) * in.stride;
-      float* dst = valueAt(out, o, y, 0);
-      for (int x = 0; x < l.out.width; ++x) dst[x] = activateScalar(row[x], l.activation);
+      float* d = valueAt(out, o, y, 0);
+      for (int x = 0; x < l.out.width; ++x) d[x] = activateScalar(row[x], l.activation);
     }
   }
 }

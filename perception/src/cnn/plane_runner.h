@@ -33,7 +33,8 @@ class PlaneRunner {
   void convScalar(int i, const Tensor& in, Tensor& out);
   void maxPool(int i, const Tensor& in, Tensor& out);
 
-  static constexpr int kMaxTaps = 121;  // kernels up to 11x11 take the vector path
+  static constexpr int kMaxTaps = 121;       // kernels up to 11x11 take the vector path
+  static constexpr int kMaxChannels = 1024;  // filters of one convolution
 
   const Net& net_;
   int margin_ = 0;
@@ -43,6 +44,7 @@ class PlaneRunner {
   std::vector<Tensor> outputs_;
   std::vector<std::vector<float>> packed_;  // convolution: [block][c][ky][kx][j]
   std::vector<float> scratch_;              // flattened convolution result before activation
+  std::vector<std::vector<float>> masks_;   // same-size convolutions: 1 on real positions, 0 in margins
   std::vector<float> result_;
 };
 
