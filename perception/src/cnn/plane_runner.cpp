@@ -27,6 +27,7 @@ IVec stepMask(int first) {
 }
 const IVec kEven = stepMask(0);
 const IVec kOdd = stepMask(1);
+const IVec kIota = stepMask(0) / 2;
 
 inline float activateScalar(float v, Activation a) {
   return a == Activation::kLeaky && v < 0.0f ? v * kLeakySlope : v;
@@ -83,7 +84,7 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
       const int full = std::min(pool.out.width, w / 2);
       int ox = 0;
       // kLanes outputs at a time: even and odd columns of two rows, by shuffles. Reads may run
-      // past the row (into the margin or the slack); the extra results are not stored.
+      // past the row (into the margin or the slack).
       for (; ox < full; ox += kLanes) {
         const Vec a0 = loadu(r0 + 2 * ox), a1 = loadu(r0 + 2 * ox + kLanes);
         const Vec b0 = loadu(r1 + 2 * ox), b1 = loadu(r1 + 2 * ox + kLanes);
@@ -92,7 +93,11 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
         Vec m = ra > rb ? ra : rb;
         const Vec n = sa > sb ? sa : sb;
         m = activate(m > n ? m : n, a);
-        std::memcpy(out + ox, &m, sizeof(float) * std::min(kLanes, full - ox));
+        // Lanes past the row become 0 and land in the margin, the next row (written after
+        // this one) or the gap after the plane.
+        const Vec zero = {};
+        m = kIota < (full - ox) ? m : zero;
+        std::memcpy(out + ox, &m, sizeof(Vec));
       }
       for (int ox = full; ox < pool.out.width; ++ox) {
         float m = -std::numeric_limits<float>::infinity();
