@@ -177,6 +177,15 @@ TEST(CnnPatch, ExtractsAndNormalises) {
   // Outside the image: the border repeats.
   extractPatch(image.view(), {-20, -20, 8, 8}, 8, 8, PatchNormalization::kUnitRange, out);
   EXPECT_FLOAT_EQ(out[63], 0.0f);
+  // Past the right and bottom border: the last column repeats.
+  extractPatch(image.view(), {35, 25, 8, 8}, 8, 8, PatchNormalization::kUnitRange, out);
+  EXPECT_FLOAT_EQ(out[3], 38 * 5 / 255.0f);
+  EXPECT_FLOAT_EQ(out[4], 39 * 5 / 255.0f);
+  EXPECT_FLOAT_EQ(out[63], 39 * 5 / 255.0f);
+  // A one-pixel-wide image.
+  GrayImage column(1, 4, 100);
+  extractPatch(column.view(), {0, 0, 1, 4}, 2, 2, PatchNormalization::kUnitRange, out);
+  EXPECT_FLOAT_EQ(out[3], 100 / 255.0f);
   expectError([&] { extractPatch(image.view(), {0, 0, 0, 8}, 8, 8, PatchNormalization::kUnitRange, out); },
               {"positive size"});
 }
