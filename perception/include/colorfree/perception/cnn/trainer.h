@@ -28,7 +28,7 @@ enum class Optimizer { kSgd, kAdam };
 /// Training settings. The same settings, data and seed give the same weights, byte for byte.
 struct TrainerParams {
   Optimizer optimizer = Optimizer::kAdam;
-  float learning_rate = 0.01f;  ///< step size (Adam's α, or SGD's rate)
+  float learning_rate = 0.005f;  ///< step size (Adam's α, or SGD's rate)
   float momentum = 0.9f;        ///< SGD momentum; Adam's β1
   float adam_beta2 = 0.999f;
   float weight_decay = 1e-4f;  ///< L2 on weights (not biases), added to the gradient
