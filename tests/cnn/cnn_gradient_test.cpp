@@ -49,6 +49,8 @@ const Case kCases[] = {
      "[connected]\noutput=3\nactivation=linear\n[softmax]\n"},
 };
 
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
 class CnnGradient : public ::testing::TestWithParam<Case> {};
 
 TEST_P(CnnGradient, MatchesCentralDifferences) {
