@@ -89,7 +89,8 @@ inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, c
 template <int NB>
 inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
                       Vec* out, int O) {
-  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
+  const float* wb =
+      w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   for (int oy = 0; oy < l.out.height; ++oy) {
     for (int ox = 0; ox < l.out.width; ++ox) {
       Vec acc[NB];
@@ -105,7 +106,8 @@ inline void convBlock(const Layer& l, const float* w, const float* bias, int o0,
 template <int NB>
 inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, const float* bias,
                           int o0, const Vec* in, Vec* out, int O) {
-  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
+  const float* wb =
+      w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   const int off = -pool.pad / 2;
   for (int py = 0; py < pool.out.height; ++py) {
     const int cy0 = py * pool.stride + off;
@@ -129,8 +131,8 @@ inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, con
 }
 
 template <int NB>
-inline void connectedBlock(const Layer& l, const float* w, const float* bias, int o0,
-                           const Vec* in, Vec* out) {
+inline void connectedBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
+                           Vec* out) {
   const int n = l.in.size();
   Vec acc[NB];
   for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);

@@ -14,8 +14,10 @@ void packWeights(const Layer& l, const float* params, float* packed) {
         for (int c = 0; c < C; ++c) {
           for (int ky = 0; ky < K; ++ky) {
             for (int kx = 0; kx < K; ++kx) {
-              float* dst = block + (((static_cast<std::size_t>(ky) * K + kx) * C + c) * nb + j) * kWeightWidth;
-              std::fill(dst, dst + kWeightWidth, w[((static_cast<std::size_t>(o0 + j) * C + c) * K + ky) * K + kx]);
+              float* dst = block + (((static_cast<std::size_t>(ky) * K + kx) * C + c) * nb + j) *
+                                       kWeightWidth;
+              std::fill(dst, dst + kWeightWidth,
+                        w[((static_cast<std::size_t>(o0 + j) * C + c) * K + ky) * K + kx]);
             }
           }
         }
@@ -27,8 +29,10 @@ void packWeights(const Layer& l, const float* params, float* packed) {
         for (int c = 0; c < C; ++c) {
           for (int y = 0; y < H; ++y) {
             for (int x = 0; x < W; ++x) {
-              float* dst = block + (static_cast<std::size_t>((y * W + x) * C + c) * nb + j) * kWeightWidth;
-              std::fill(dst, dst + kWeightWidth, w[static_cast<std::size_t>(o0 + j) * n + (c * H + y) * W + x]);
+              float* dst =
+                  block + (static_cast<std::size_t>((y * W + x) * C + c) * nb + j) * kWeightWidth;
+              std::fill(dst, dst + kWeightWidth,
+                        w[static_cast<std::size_t>(o0 + j) * n + (c * H + y) * W + x]);
             }
           }
         }
@@ -69,8 +73,8 @@ LaneRunner::LaneRunner(const Net& net, bool inference) : net_(net) {
       }
     }
     for (std::size_t i = 0; i + 1 < n; ++i) {
-      fused_[i] = layers[i].type == LayerType::kConvolution && layers[i + 1].type == LayerType::kMaxPool &&
-                  consumers[i].size() == 1;
+      fused_[i] = layers[i].type == LayerType::kConvolution &&
+                  layers[i + 1].type == LayerType::kMaxPool && consumers[i].size() == 1;
     }
     // A layer that writes its output itself (a convolution, a max pool or a convolution fused
     // with the max pool after it) can write into the one route that is its only reader.
@@ -91,7 +95,8 @@ LaneRunner::LaneRunner(const Net& net, bool inference) : net_(net) {
       }
       bool all = true;
       for (int j : l.inputs) {
-        all = all && writesDirectly(j) && consumers[j].size() == 1 && consumers[j][0] == static_cast<int>(r) &&
+        all = all && writesDirectly(j) && consumers[j].size() == 1 &&
+              consumers[j][0] == static_cast<int>(r) &&
               std::count(l.inputs.begin(), l.inputs.end(), j) == 1;
       }
       if (!all) continue;
@@ -125,7 +130,8 @@ void LaneRunner::setInput(const float* samples, int count) {
   const int plane = s.height * s.width, C = s.channels, n = s.size();
   // Built a whole vector at a time (scalar stores into vectors stall the loads that follow).
   const float* src[kLanes];
-  for (int b = 0; b < kLanes; ++b) src[b] = samples + static_cast<std::size_t>(std::min(b, count - 1)) * n;
+  for (int b = 0; b < kLanes; ++b)
+    src[b] = samples + static_cast<std::size_t>(std::min(b, count - 1)) * n;
   for (int c = 0; c < C; ++c) {
     for (int p = 0; p < plane; ++p) {
       Vec v;

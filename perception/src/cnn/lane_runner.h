@@ -37,7 +37,7 @@ class LaneRunner {
   std::vector<std::vector<float>> packed_;
   std::vector<std::vector<const Vec*>> route_sources_;
   std::vector<std::vector<int>> route_channels_;
-  std::vector<bool> fused_;  ///< layer i is a convolution fused with the max pool i + 1
+  std::vector<bool> fused_;      ///< layer i is a convolution fused with the max pool i + 1
   std::vector<Vec*> out_ptr_;    ///< where layer i writes (its buffer or a slice of a route's)
   std::vector<int> out_stride_;  ///< channels per pixel there
   std::vector<bool> skip_;       ///< a route whose inputs already wrote its concatenation

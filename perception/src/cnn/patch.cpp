@@ -14,7 +14,7 @@ namespace {
 constexpr int kMaxPatchSide = 256;
 // The resampling reads two neighbouring pixels as one little-endian 16-bit word.
 static_assert(std::endian::native == std::endian::little);
-}
+}  // namespace
 
 void normalizePatch(float* values, int count, PatchNormalization normalization) {
   if (normalization == PatchNormalization::kUnitRange) {
@@ -62,7 +62,8 @@ void extractPatch(const GrayView& image, const PatchBox& box, int width, int hei
   int x0[kMaxPatchSide], fx[kMaxPatchSide];
   const float sx = box.width_px / static_cast<float>(width);
   const float sy = box.height_px / static_cast<float>(height);
-  const float max_x = static_cast<float>(image.width - 1), max_y = static_cast<float>(image.height - 1);
+  const float max_x = static_cast<float>(image.width - 1),
+              max_y = static_cast<float>(image.height - 1);
   for (int u = 0; u < width; ++u) {
     const float x = std::clamp(box.x_px + (static_cast<float>(u) + 0.5f) * sx - 0.5f, 0.0f, max_x);
     x0[u] = static_cast<int>(x);
@@ -85,7 +86,8 @@ void extractPatch(const GrayView& image, const PatchBox& box, int width, int hei
     const std::uint8_t* r1 = image.row(y1);
     float* o = out + static_cast<std::size_t>(v) * width;
     if (!pairs) {
-      for (int u = 0; u < width; ++u) o[u] = static_cast<float>(r0[0] * 65536 + (r1[0] - r0[0]) * fy * 256) * kScale;
+      for (int u = 0; u < width; ++u)
+        o[u] = static_cast<float>(r0[0] * 65536 + (r1[0] - r0[0]) * fy * 256) * kScale;
       continue;
     }
     for (int u = 0; u < width; ++u) {

@@ -39,7 +39,8 @@ inline float activateScalar(float v, Activation a) {
 // positions that fall into margin columns, so the margins stay zero), into dst[j].
 template <int NB>
 void convPlanes(int C, int K, const int* offsets, const float* const* planes, const float* w,
-                const float* bias, int vectors, float* const* dst, const float* mask, Activation a) {
+                const float* bias, int vectors, float* const* dst, const float* mask,
+                Activation a) {
   for (int t = 0; t < vectors; ++t) {
     Vec acc[NB];
     for (int j = 0; j < NB; ++j) acc[j] = splat(bias[j]);
@@ -65,8 +66,9 @@ struct ConvPlanesRun {
   static void run(int o, int C, int K, const int* offsets, const float* const* planes,
                   const float* w, const float* bias, int vectors, float* const* dst,
                   const float* mask, Activation a) {
-    convPlanes<NB>(C, K, offsets, planes, w + static_cast<std::size_t>(o) * C * K * K * kWeightWidth,
-                   bias + o, vectors, dst + o, mask, a);
+    convPlanes<NB>(C, K, offsets, planes,
+                   w + static_cast<std::size_t>(o) * C * K * K * kWeightWidth, bias + o, vectors,
+                   dst + o, mask, a);
   }
 };
 
@@ -112,7 +114,8 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
       const int xa = std::max(0, x0), xb = std::min(w, x0 + K);
       float m = -std::numeric_limits<float>::infinity();
       for (int y = ya; y < yb; ++y) {
-        for (int x = xa; x < xb; ++x) m = std::max(m, src[static_cast<std::size_t>(y) * stride + x]);
+        for (int x = xa; x < xb; ++x)
+          m = std::max(m, src[static_cast<std::size_t>(y) * stride + x]);
       }
       out[ox] = activateScalar(m, a);
     }
@@ -146,7 +149,8 @@ PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
       for (int j : l.inputs) {
         outputs_[i].stride = outputs_[j].stride;
         outputs_[i].rows = outputs_[j].rows;
-        outputs_[i].planes.insert(outputs_[i].planes.end(), outputs_[j].planes.begin(), outputs_[j].planes.end());
+        outputs_[i].planes.insert(outputs_[i].planes.end(), outputs_[j].planes.begin(),
+                                  outputs_[j].planes.end());
       }
     } else {
       outputs_[i] = makeTensor(l.out.height, l.out.width, l.out.channels);
@@ -180,8 +184,8 @@ PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
   }
   for (std::size_t i = 0; i + 1 < layers.size(); ++i) {
     fused_[i] = layers[i].type == LayerType::kConvolution && layers[i].stride == 1 &&
-                layers[i].size * layers[i].size <= kMaxTaps && layers[i + 1].type == LayerType::kMaxPool &&
-                !routed[i];
+                layers[i].size * layers[i].size <= kMaxTaps &&
+                layers[i + 1].type == LayerType::kMaxPool && !routed[i];
   }
   result_.assign(net.output().size(), 0.0f);
   repack();
@@ -216,8 +220,10 @@ void PlaneRunner::repack() {
       for (int j = 0; j < nb; ++j) {
         for (int c = 0; c < C; ++c) {
           for (int k = 0; k < K * K; ++k) {
-            float* dst = block + ((static_cast<std::size_t>(c) * K * K + k) * nb + j) * kWeightWidth;
-            std::fill(dst, dst + kWeightWidth, w[(static_cast<std::size_t>(o0 + j) * C + c) * K * K + k]);
+            float* dst =
+                block + ((static_cast<std::size_t>(c) * K * K + k) * nb + j) * kWeightWidth;
+            std::fill(dst, dst + kWeightWidth,
+                      w[(static_cast<std::size_t>(o0 + j) * C + c) * K * K + k]);
           }
         }
       }
@@ -241,7 +247,8 @@ void PlaneRunner::convScalar(int i, const Tensor& in, Tensor& out) {
             for (int kx = 0; kx < K; ++kx) {
               const int ix = ox * l.stride - l.pad + kx;
               if (ix < 0 || ix >= l.in.width) continue;
-              acc += w[((static_cast<std::size_t>(o) * C + c) * K + ky) * K + kx] * *valueAt(in, c, iy, ix);
+              acc += w[((static_cast<std::size_t>(o) * C + c) * K + ky) * K + kx] *
+                     *valueAt(in, c, iy, ix);
             }
           }
         }
@@ -266,7 +273,8 @@ void PlaneRunner::conv(int i, const Tensor& in, Tensor& out) {
   const float* bias = net_.params().data() + l.param_offset;
   float* dst[kMaxChannels];
   if (fused_[i] || masks_[i].empty()) {
-    for (int o = 0; o < l.filters; ++o) dst[o] = scratch_.data() + static_cast<std::size_t>(o) * scratch_stride;
+    for (int o = 0; o < l.filters; ++o)
+      dst[o] = scratch_.data() + static_cast<std::size_t>(o) * scratch_stride;
     forBlocks<ConvPlanesRun>(l.filters, l.in.channels, K, offsets, planes, packed_[i].data(), bias,
                              vectors, dst, nullptr, l.activation);
   } else {
@@ -282,7 +290,8 @@ void PlaneRunner::conv(int i, const Tensor& in, Tensor& out) {
     Tensor& pooled = outputs_[i + 1];
     for (int o = 0; o < l.filters; ++o) {
       maxPoolPlane(pool, scratch_.data() + static_cast<std::size_t>(o) * scratch_stride, in.stride,
-                   l.out.height, l.out.width, l.activation, valueAt(pooled, o, 0, 0), pooled.stride);
+                   l.out.height, l.out.width, l.activation, valueAt(pooled, o, 0, 0),
+                   pooled.stride);
     }
     return;
   }
@@ -308,7 +317,8 @@ const float* PlaneRunner::run(const float* input) {
   const Shape& s = net_.input();
   for (int c = 0; c < s.channels; ++c) {
     for (int y = 0; y < s.height; ++y) {
-      std::memcpy(valueAt(input_, c, y, 0), input + (static_cast<std::size_t>(c) * s.height + y) * s.width,
+      std::memcpy(valueAt(input_, c, y, 0),
+                  input + (static_cast<std::size_t>(c) * s.height + y) * s.width,
                   sizeof(float) * s.width);
     }
   }
