@@ -53,6 +53,7 @@ FieldLineParams FieldLineParams::load(const std::string& path) {
   p.penalty_mark_max_extent_m = f.getInRange("penalty_mark_max_extent_m", 0.01, 2);
   p.penalty_mark_clear_radius_m = f.getInRange("penalty_mark_clear_radius_m", 0, 5);
   p.penalty_mark_max_distance_m = f.getInRange("penalty_mark_max_distance_m", 0, 20);
+  p.penalty_mark_max_dark_fraction = f.getInRange("penalty_mark_max_dark_fraction", 0, 1);
   p.min_penalty_mark_spots = static_cast<int>(f.getInRange("min_penalty_mark_spots", 1, 100));
   f.finish();
   if (p.min_width_factor >= p.max_width_factor) {
@@ -225,6 +226,37 @@ double widthAlongScan(const CameraModel& camera, const Eigen::Vector2d& ground,
   const double across = std::abs((*p2 - *p1).dot(image_normal));
   const double cosine = std::max(0.2, std::abs(vertical_scan ? image_normal.y() : image_normal.x()));
   return across / cosine;
+}
+
+// A white cross on the carpet has nothing darker than the carpet inside; a ball (its black
+// patches) has. Compares the pixels of a square of the mark's size (a little more, seen from
+// the side it is foreshortened the same way) with the carpet around it.
+bool hasDarkInside(const GrayView& image, const CameraModel& camera, const Eigen::Vector2d& centre,
+                   const Eigen::Vector2d& centre_px, double mark_size_m, const FieldLineParams& p) {
+  // The mark's extent in the image: across (sideways on the ground) and along the view (ahead).
+  const Eigen::Vector2d ahead = centre.normalized();
+  const Eigen::Vector2d side(-ahead.y(), ahead.x());
+  const Eigen::Vector2d a = centre + side * (mark_size_m * 0.6), b = centre + ahead * (mark_size_m * 0.6);
+  const auto a_px = camera.robotToPixel({a.x(), a.y(), 0});
+  const auto b_px = camera.robotToPixel({b.x(), b.y(), 0});
+  if (!a_px || !b_px) return false;
+  const int half_x = std::max(2, static_cast<int>(std::lround(std::abs(a_px->x() - centre_px.x()) + std::abs(b_px->x() - centre_px.x()))));
+  const int half_y = std::max(2, static_cast<int>(std::lround(std::abs(a_px->y() - centre_px.y()) + std::abs(b_px->y() - centre_px.y()))));
+  const int cx = static_cast<int>(centre_px.x()), cy = static_cast<int>(centre_px.y());
+  std::vector<int> ring, inner;
+  int inside = 0;
+  for (int y = cy - 2 * half_y; y <= cy + 2 * half_y; ++y) {
+    for (int x = cx - 2 * half_x; x <= cx + 2 * half_x; x += 2) {
+      if (!image.contains(x, y)) continue;
+      const bool in = std::abs(x - cx) <= half_x && std::abs(y - cy) <= half_y;
+      (in ? inner : ring).push_back(image.at(x, y));
+    }
+  }
+  if (ring.size() < 8 || inner.empty()) return false;
+  std::nth_element(ring.begin(), ring.begin() + ring.size() / 2, ring.end());
+  const double carpet = ring[ring.size() / 2];
+  for (int v : inner) inside += v < carpet - p.min_spot_contrast;
+  return inside > p.penalty_mark_max_dark_fraction * static_cast<double>(inner.size());
 }
 
 struct Piece {
@@ -826,9 +858,11 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     }
     for (int id : cluster) used[id] = 1;
     if (!clear) continue;
+    const auto centre_px = camera.robotToPixel({centre.x(), centre.y(), 0});
+    if (!centre_px || hasDarkInside(image, camera, centre, *centre_px, field_.penalty_mark_size_m, p)) continue;
     CircleMarkPercept mark;
     mark.centre_in_robot = centre;
-    if (const auto px = camera.robotToPixel({centre.x(), centre.y(), 0})) mark.centre_px = *px;
+    mark.centre_px = *centre_px;
     out.features.penalty_marks.push_back(mark);
   }
   return out;
