@@ -8,6 +8,11 @@ namespace colorfree::app {
 // expectation not met) and throws colorfree::Error on bad input (exit 2). main.cpp lists them in
 // the order --help shows them.
 
+// `render` (a scenario's frames and truth into a folder).
+void addRenderCommand(CLI::App& app, int& exit_code);
+
+// `train` (a tiny CNN on a folder of patches) and `cnn-table` (the paper's Table 1 for our nets).
+void addTrainCommand(CLI::App& app, int& exit_code);
 void addDetectCommand(CLI::App& app, int& exit_code);
 
 }  // namespace colorfree::app

@@ -11,6 +11,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", COLORFREE_VERSION);
   int exit_code = 0;
   (void)exit_code;
+  colorfree::app::addRenderCommand(app, exit_code);
+  colorfree::app::addTrainCommand(app, exit_code);
   colorfree::app::addDetectCommand(app, exit_code);
   try {
     app.parse(argc, argv);

@@ -1,0 +1,713 @@
+#include "colorfree/groundtruth/scorer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "colorfree/groundtruth/gallery.h"
+#include "colorfree/groundtruth/matching.h"
+
+namespace colorfree {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180;
+constexpr int kCropSizePx = 160;
+constexpr int kFrameThumbWidthPx = 480;
+constexpr double kToleranceEpsilon = 1e-9;
+
+using json = nlohmann::json;
+
+struct ObjectTally {
+  long proposal_frames = 0, proposals = 0, proposal_truths = 0, proposal_hits = 0;
+  long detector_frames = 0, percepts = 0, truths = 0, detected = 0, false_positives = 0;
+  long true_positives = 0;
+  long position_errors = 0;
+  double position_error_sum = 0, position_error_sq = 0;
+};
+
+struct BinTally {
+  long truths = 0, detected = 0;
+};
+
+struct RateTally {
+  long truths = 0, hits = 0, percepts = 0, false_positives = 0;
+};
+
+struct TimeTally {
+  long n = 0;
+  double sum = 0, max = 0;
+};
+
+struct ClassifierTally {
+  long samples = 0, correct = 0, true_pos = 0, false_pos = 0, false_neg = 0;
+};
+
+using ClassCounts = std::array<long, kOrientationClassCount>;
+
+struct Tally {
+  long frames = 0;
+  ObjectTally ball, robot;
+  std::map<int, BinTally> ball_by_distance, robot_by_distance;
+  long orientation_frames = 0;
+  ClassCounts orientation_raw{}, orientation_filtered{};
+  std::map<int, std::pair<ClassCounts, ClassCounts>> orientation_by_heading;
+  long field_frames = 0;
+  RateTally lines, intersections, circle, marks;
+  long pose_frames = 0, pose_fits = 0;
+  double pose_error_sum_mm = 0, pose_error_sq_mm = 0;
+  std::map<std::string, TimeTally> timing;
+  std::map<std::string, ClassifierTally> classifiers;
+};
+
+json rate(long num, long den) { return den > 0 ? json(static_cast<double>(num) / den) : json(nullptr); }
+json perFrame(long n, long frames) { return frames > 0 ? json(static_cast<double>(n) / frames) : json(nullptr); }
+
+json objectJson(const ObjectTally& t) {
+  json j;
+  j["detection_rate"] = t.detector_frames > 0 ? rate(t.detected, t.truths) : json(nullptr);
+  j["proposal_recall"] = t.proposal_frames > 0 ? rate(t.proposal_hits, t.proposal_truths) : json(nullptr);
+  j["proposals_per_frame"] = perFrame(t.proposals, t.proposal_frames);
+  j["false_positives_per_frame"] = perFrame(t.false_positives, t.detector_frames);
+  j["precision"] = rate(t.true_positives, t.true_positives + t.false_positives);
+  j["position_error_m"] = t.position_errors > 0 ? json(t.position_error_sum / t.position_errors) : json(nullptr);
+  j["position_error_rms_m"] =
+      t.position_errors > 0 ? json(std::sqrt(t.position_error_sq / t.position_errors)) : json(nullptr);
+  j["counts"] = {{"proposal_frames", t.proposal_frames}, {"proposals", t.proposals},
+                 {"proposal_truths", t.proposal_truths}, {"proposal_hits", t.proposal_hits},
+                 {"detector_frames", t.detector_frames}, {"percepts", t.percepts},
+                 {"truths", t.truths}, {"detected", t.detected},
+                 {"true_positives", t.true_positives}, {"false_positives", t.false_positives}};
+  return j;
+}
+
+json classesJson(const ClassCounts& c, bool present) {
+  long total = 0;
+  for (long v : c) total += v;
+  json j;
+  const char* names[] = {"perceived", "semi_perceived", "not_perceived", "false_positive"};
+  for (int k = 0; k < kOrientationClassCount; ++k) {
+    j[names[k]] = present ? rate(c[k], total) : json(nullptr);
+  }
+  j["robot_frames"] = total;
+  return j;
+}
+
+json distanceJson(const std::map<int, BinTally>& bins, double bin_m) {
+  json a = json::array();
+  for (const auto& [k, b] : bins) {
+    a.push_back({{"from_m", k * bin_m}, {"to_m", (k + 1) * bin_m}, {"truths", b.truths},
+                 {"detection_rate", rate(b.detected, b.truths)}});
+  }
+  return a;
+}
+
+json tallyJson(const Tally& t, const ScoringParams& p) {
+  json j;
+  j["frames"] = t.frames;
+  j["ball"] = objectJson(t.ball);
+  j["robot"] = objectJson(t.robot);
+  const bool ori = t.orientation_frames > 0;
+  json o = classesJson(t.orientation_raw, ori);
+  o["tolerance_deg"] = p.orientation_tolerance_deg;
+  o["filtered"] = classesJson(t.orientation_filtered, ori);
+  json per = json::array();
+  for (const auto& [bin, counts] : t.orientation_by_heading) {
+    per.push_back({{"heading_deg", bin * p.orientation_heading_bin_deg},
+                   {"raw", classesJson(counts.first, ori)},
+                   {"filtered", classesJson(counts.second, ori)}});
+  }
+  o["per_heading"] = per;
+  j["orientation"] = o;
+  json f;
+  const bool ff = t.field_frames > 0;
+  f["line_detection_rate"] = ff ? rate(t.lines.hits, t.lines.truths) : json(nullptr);
+  f["intersection_detection_rate"] = ff ? rate(t.intersections.hits, t.intersections.truths) : json(nullptr);
+  f["centre_circle_detection_rate"] = ff ? rate(t.circle.hits, t.circle.truths) : json(nullptr);
+  f["penalty_mark_detection_rate"] = ff ? rate(t.marks.hits, t.marks.truths) : json(nullptr);
+  f["false_lines_per_frame"] = ff ? perFrame(t.lines.false_positives, t.field_frames) : json(nullptr);
+  f["false_intersections_per_frame"] =
+      ff ? perFrame(t.intersections.false_positives, t.field_frames) : json(nullptr);
+  f["pose_error_mm"] = t.pose_fits > 0 ? json(t.pose_error_sum_mm / t.pose_fits) : json(nullptr);
+  f["pose_error_rms_mm"] = t.pose_fits > 0 ? json(std::sqrt(t.pose_error_sq_mm / t.pose_fits)) : json(nullptr);
+  f["pose_fit_rate"] = t.pose_frames > 0 ? rate(t.pose_fits, t.pose_frames) : json(nullptr);
+  f["counts"] = {{"frames", t.field_frames},
+                 {"lines_in_view", t.lines.truths}, {"lines_detected", t.lines.hits},
+                 {"line_percepts", t.lines.percepts}, {"false_lines", t.lines.false_positives},
+                 {"intersections_in_view", t.intersections.truths},
+                 {"intersections_detected", t.intersections.hits},
+                 {"intersection_percepts", t.intersections.percepts},
+                 {"false_intersections", t.intersections.false_positives},
+                 {"pose_frames", t.pose_frames}, {"pose_fits", t.pose_fits}};
+  j["field_features"] = f;
+  json tm = json::object();
+  for (const auto& s : paperStageNames()) tm[s] = {{"mean", nullptr}, {"max", nullptr}};
+  for (const auto& [name, tt] : t.timing) {
+    tm[name] = {{"mean", tt.n > 0 ? json(tt.sum / tt.n) : json(nullptr)},
+                {"max", tt.n > 0 ? json(tt.max) : json(nullptr)}};
+  }
+  j["timing_ms"] = tm;
+  json cnn = json::object();
+  for (const auto& s : paperClassifierNames()) cnn[s] = {{"accuracy", nullptr}, {"samples", 0}};
+  for (const auto& [name, c] : t.classifiers) {
+    cnn[name] = {{"accuracy", rate(c.correct, c.samples)}, {"samples", c.samples},
+                 {"true_positives", c.true_pos}, {"false_positives", c.false_pos},
+                 {"false_negatives", c.false_neg}};
+  }
+  j["cnn"] = cnn;
+  j["by_distance"] = {{"ball", distanceJson(t.ball_by_distance, p.distance_bin_m)},
+                      {"robot", distanceJson(t.robot_by_distance, p.distance_bin_m)}};
+  return j;
+}
+
+json paramsJson(const ScoringParams& p) {
+  return {{"ball_min_visible_fraction", p.ball_min_visible_fraction},
+          {"ball_min_distance_m", p.ball_min_distance_m},
+          {"ball_max_distance_m", p.ball_max_distance_m},
+          {"ball_min_radius_px", p.ball_min_radius_px},
+          {"robot_min_visible_fraction", p.robot_min_visible_fraction},
+          {"robot_min_distance_m", p.robot_min_distance_m},
+          {"robot_max_distance_m", p.robot_max_distance_m},
+          {"robot_min_height_px", p.robot_min_height_px},
+          {"robot_depth_m", p.robot_depth_m},
+          {"robot_feet_region_height_m", p.robot_feet_region_height_m},
+          {"foot_lateral_offset_m", p.foot_lateral_offset_m},
+          {"ball_match_radius_fraction", p.ball_match_radius_fraction},
+          {"ball_match_min_px", p.ball_match_min_px},
+          {"robot_match_min_iou", p.robot_match_min_iou},
+          {"robot_match_max_feet_distance_m", p.robot_match_max_feet_distance_m},
+          {"orientation_tolerance_deg", p.orientation_tolerance_deg},
+          {"orientation_heading_bin_deg", p.orientation_heading_bin_deg},
+          {"line_min_length_px", p.line_min_length_px},
+          {"line_match_max_px", p.line_match_max_px},
+          {"intersection_match_max_px", p.intersection_match_max_px},
+          {"feature_visibility_window_px", p.feature_visibility_window_px},
+          {"distance_bin_m", p.distance_bin_m}};
+}
+
+bool segmentNear(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const LineInImage& truth,
+                 double max_px) {
+  for (const Eigen::Vector2d& p : {a, b, Eigen::Vector2d((a + b) / 2)}) {
+    if (pointSegmentDistance(p, truth.start_px, truth.end_px) > max_px) return false;
+  }
+  return true;
+}
+
+bool onCircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+              const std::vector<LineInImage>& pieces, double max_px) {
+  if (pieces.empty()) return false;
+  for (const Eigen::Vector2d& p : {a, b, Eigen::Vector2d((a + b) / 2)}) {
+    double best = 1e300;
+    for (const auto& piece : pieces) best = std::min(best, pointSegmentDistance(p, piece.start_px, piece.end_px));
+    if (best > max_px) return false;
+  }
+  return true;
+}
+
+std::string fmt(double v, int prec = 2) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(prec);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+const char* orientationClassName(OrientationClass c) {
+  switch (c) {
+    case OrientationClass::kPerceived: return "perceived";
+    case OrientationClass::kSemiPerceived: return "semi_perceived";
+    case OrientationClass::kNotPerceived: return "not_perceived";
+    case OrientationClass::kFalsePositive: return "false_positive";
+  }
+  return "?";
+}
+
+OrientationClass classifyOrientation(const std::optional<RobotOrientation>& estimate,
+                                     double true_angle_rad, double tolerance_rad) {
+  if (!estimate) return OrientationClass::kNotPerceived;
+  const double err = std::abs(wrapAngle(estimate->angle_rad - true_angle_rad));
+  const double flipped = kPi - err;  // error of the opposite facing
+  const double tol = tolerance_rad + kToleranceEpsilon;
+  if (estimate->facing_known) {
+    if (err <= tol) return OrientationClass::kPerceived;
+    if (flipped <= tol) return OrientationClass::kSemiPerceived;
+    return OrientationClass::kFalsePositive;
+  }
+  return std::min(err, flipped) <= tol ? OrientationClass::kSemiPerceived
+                                       : OrientationClass::kFalsePositive;
+}
+
+const std::vector<std::string>& paperStageNames() {
+  static const std::vector<std::string> kNames = {
+      "high_contrast", "field_features", "robot_proposals", "robot_detector",
+      "robot_orientation", "ball_proposals", "ball_detector"};
+  return kNames;
+}
+
+const std::vector<std::string>& paperClassifierNames() {
+  static const std::vector<std::string> kNames = {"RobotNet", "BoostBallNet", "BallNet",
+                                                  "OriBoostNet", "OriNet"};
+  return kNames;
+}
+
+struct Scorer::State {
+  Tally total;
+  std::vector<std::pair<CaseInfo, Tally>> cases;
+  std::map<std::string, std::vector<GalleryItem>> gallery_by_kind;
+  std::vector<GalleryItem> gallery;  // flattened view, rebuilt on change
+  void rebuildGallery() {
+    gallery.clear();
+    for (const auto& [k, v] : gallery_by_kind) gallery.insert(gallery.end(), v.begin(), v.end());
+  }
+};
+
+Scorer::Scorer(ScoringParams params, FieldDimensions dims)
+    : params_(params), dims_(dims), field_(FieldModel::fromDimensions(dims)),
+      state_(std::make_unique<State>()) {}
+Scorer::~Scorer() = default;
+Scorer::Scorer(Scorer&&) noexcept = default;
+Scorer& Scorer::operator=(Scorer&&) noexcept = default;
+
+void Scorer::beginCase(const CaseInfo& info) { state_->cases.push_back({info, Tally{}}); }
+
+int Scorer::frameCount() const { return static_cast<int>(state_->total.frames); }
+
+const std::vector<GalleryItem>& Scorer::gallery() const { return state_->gallery; }
+
+FrameTruth Scorer::addFrame(const WorldState& world, const FramePercepts& percepts,
+                            const GrayImage* image) {
+  FrameTruth truth = computeFrameTruth(world, field_, dims_, params_);
+  addFrame(truth, percepts, &world.camera.model, image);
+  return truth;
+}
+
+void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const CameraModel* camera,
+                      const GrayImage* image) {
+  if (state_->cases.empty()) beginCase(CaseInfo{});
+  Tally& case_tally = state_->cases.back().second;
+  const ScoringParams& p = params_;
+  const Eigen::Isometry3d robot_to_field = robotToField(truth.observer);
+  auto toField = [&](const Eigen::Vector2d& in_robot) {
+    return Eigen::Vector2d((robot_to_field * Eigen::Vector3d(in_robot.x(), in_robot.y(), 0)).head<2>());
+  };
+  auto feetInField = [&](const Eigen::Vector2d& feet_px) -> std::optional<Eigen::Vector2d> {
+    if (!camera) return std::nullopt;
+    const auto g = camera->pixelToGround(feet_px);
+    if (!g) return std::nullopt;
+    return toField(*g);
+  };
+  auto distanceBin = [&](double d) { return static_cast<int>(std::floor(d / p.distance_bin_m)); };
+  std::vector<Tally*> tallies = {&state_->total, &case_tally};
+  for (Tally* t : tallies) ++t->frames;
+
+  // Events for the gallery: (kind, severity, region, overlays, caption).
+  struct Event {
+    std::string kind;
+    double severity;
+    PixelBox region;
+    std::vector<Overlay> overlays;
+    std::string caption;
+  };
+  std::vector<Event> events;
+  std::vector<Overlay> frame_overlays;
+  int frame_errors = 0;
+
+  // Ball.
+  std::vector<BallInImage> balls;
+  if (truth.ball_present && truth.ball.in_view) balls.push_back(truth.ball);
+  auto ballOverlay = [](const BallInImage& b) {
+    Overlay o;
+    o.shape = Overlay::Shape::kCircle;
+    o.a = b.centre_px;
+    o.radius_px = b.radius_px;
+    return o;
+  };
+  for (const auto& b : balls) frame_overlays.push_back(ballOverlay(b));
+  if (pc.ball_proposals) {
+    for (Tally* t : tallies) {
+      ++t->ball.proposal_frames;
+      t->ball.proposals += static_cast<long>(pc.ball_proposals->size());
+    }
+    for (const auto& b : balls) {
+      if (!b.should_detect) continue;
+      bool hit = false;
+      for (const auto& prop : *pc.ball_proposals) hit = hit || ballMatchCost(b, prop.centre_px, p).has_value();
+      for (Tally* t : tallies) {
+        ++t->ball.proposal_truths;
+        if (hit) ++t->ball.proposal_hits;
+      }
+    }
+  }
+  if (pc.balls) {
+    const auto& percepts = *pc.balls;
+    std::vector<MatchCandidate> cands;
+    for (std::size_t ti = 0; ti < balls.size(); ++ti) {
+      for (std::size_t pi = 0; pi < percepts.size(); ++pi) {
+        if (auto c = ballMatchCost(balls[ti], percepts[pi].centre_px, p)) {
+          cands.push_back({static_cast<int>(ti), static_cast<int>(pi), *c});
+        }
+      }
+    }
+    const Matching m = matchOneToOne(static_cast<int>(balls.size()), static_cast<int>(percepts.size()), cands);
+    for (Tally* t : tallies) {
+      ++t->ball.detector_frames;
+      t->ball.percepts += static_cast<long>(percepts.size());
+    }
+    for (std::size_t ti = 0; ti < balls.size(); ++ti) {
+      const auto& b = balls[ti];
+      if (!b.should_detect) continue;
+      const int pi = m.truth_to_percept[ti];
+      std::optional<double> err;
+      if (pi >= 0 && percepts[pi].position_in_robot) {
+        err = (toField(*percepts[pi].position_in_robot) - b.position_in_field).norm();
+      }
+      for (Tally* t : tallies) {
+        ++t->ball.truths;
+        auto& bin = t->ball_by_distance[distanceBin(b.distance_m)];
+        ++bin.truths;
+        if (pi >= 0) {
+          ++t->ball.detected;
+          ++t->ball.true_positives;
+          ++bin.detected;
+        }
+        if (err) {
+          ++t->ball.position_errors;
+          t->ball.position_error_sum += *err;
+          t->ball.position_error_sq += *err * *err;
+        }
+      }
+      if (pi < 0) {
+        ++frame_errors;
+        std::vector<Overlay> ov = {ballOverlay(b)};
+        if (pc.ball_proposals) {
+          for (const auto& prop : *pc.ball_proposals) {
+            if ((prop.centre_px - b.centre_px).norm() < 4 * b.radius_px + 10) {
+              Overlay o;
+              o.shape = Overlay::Shape::kCircle;
+              o.role = Overlay::Role::kProposal;
+              o.a = prop.centre_px;
+              o.radius_px = prop.radius_px;
+              ov.push_back(o);
+            }
+          }
+        }
+        events.push_back({"missed_ball", b.visible_fraction,
+                          {b.centre_px.x() - b.radius_px, b.centre_px.y() - b.radius_px,
+                           b.centre_px.x() + b.radius_px, b.centre_px.y() + b.radius_px},
+                          ov,
+                          "frame " + std::to_string(truth.frame_index) + ": missed ball, r " +
+                              fmt(b.radius_px, 1) + " px, " + fmt(b.distance_m) + " m, visible " +
+                              fmt(100 * b.visible_fraction, 0) + " %"});
+      }
+    }
+    for (std::size_t pi = 0; pi < percepts.size(); ++pi) {
+      Overlay o;
+      o.shape = Overlay::Shape::kCircle;
+      o.role = Overlay::Role::kPercept;
+      o.a = percepts[pi].centre_px;
+      o.radius_px = percepts[pi].radius_px;
+      frame_overlays.push_back(o);
+      const int ti = m.percept_to_truth[pi];
+      if (ti >= 0) continue;  // a hit, or a detection of a don't-care ball
+      for (Tally* t : tallies) ++t->ball.false_positives;
+      ++frame_errors;
+      const auto& q = percepts[pi];
+      events.push_back({"false_ball", q.confidence,
+                        {q.centre_px.x() - q.radius_px, q.centre_px.y() - q.radius_px,
+                         q.centre_px.x() + q.radius_px, q.centre_px.y() + q.radius_px},
+                        {o},
+                        "frame " + std::to_string(truth.frame_index) + ": false ball, confidence " +
+                            fmt(q.confidence)});
+    }
+  }
+
+  // Robots.
+  std::vector<const RobotInImage*> robots;
+  for (const auto& r : truth.robots) {
+    if (r.in_view) robots.push_back(&r);
+  }
+  auto robotOverlay = [](const RobotInImage& r) {
+    Overlay o;
+    o.box = r.box;
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
+    o.label = "R";
+    o.label += std::to_string(r.index);
+    o.label += ' ';
+    o.label += robotSideName(r.side_seen);
+    return o;
+  };
+  for (const auto* r : robots) frame_overlays.push_back(robotOverlay(*r));
+  if (pc.robot_proposals) {
+    for (Tally* t : tallies) {
+      ++t->robot.proposal_frames;
+      t->robot.proposals += static_cast<long>(pc.robot_proposals->size());
+    }
+    for (const auto* r : robots) {
+      if (!r->should_detect) continue;
+      bool hit = false;
+      for (const auto& prop : *pc.robot_proposals) {
+        hit = hit || robotMatchCost(*r, prop.box, feetInField(prop.feet_px), p).has_value();
+      }
+      for (Tally* t : tallies) {
+        ++t->robot.proposal_truths;
+        if (hit) ++t->robot.proposal_hits;
+      }
+    }
+  }
+  if (pc.robots) {
+    const auto& percepts = *pc.robots;
+    std::vector<MatchCandidate> cands;
+    for (std::size_t ti = 0; ti < robots.size(); ++ti) {
+      for (std::size_t pi = 0; pi < percepts.size(); ++pi) {
+        if (auto c = robotMatchCost(*robots[ti], percepts[pi].box, feetInField(percepts[pi].feet_px), p)) {
+          cands.push_back({static_cast<int>(ti), static_cast<int>(pi), *c});
+        }
+      }
+    }
+    const Matching m = matchOneToOne(static_cast<int>(robots.size()), static_cast<int>(percepts.size()), cands);
+    for (Tally* t : tallies) {
+      ++t->robot.detector_frames;
+      t->robot.percepts += static_cast<long>(percepts.size());
+      if (pc.orientation_stage) ++t->orientation_frames;
+    }
+    const double tol = p.orientation_tolerance_deg * kDeg;
+    const int bins = std::max(1, static_cast<int>(std::lround(360.0 / p.orientation_heading_bin_deg)));
+    for (std::size_t ti = 0; ti < robots.size(); ++ti) {
+      const auto& r = *robots[ti];
+      if (!r.should_detect) continue;
+      const int pi = m.truth_to_percept[ti];
+      std::optional<double> err;
+      if (pi >= 0 && percepts[pi].position_in_robot) {
+        err = (toField(*percepts[pi].position_in_robot) - r.position_in_field).norm();
+      }
+      OrientationClass raw = OrientationClass::kNotPerceived, filtered = OrientationClass::kNotPerceived;
+      if (pi >= 0) {
+        raw = classifyOrientation(percepts[pi].orientation_raw, r.heading_in_observer_rad, tol);
+        filtered = classifyOrientation(percepts[pi].orientation_filtered, r.heading_in_observer_rad, tol);
+      }
+      double rel_deg = r.heading_rel_rad / kDeg;
+      if (rel_deg < 0) rel_deg += 360;
+      const int bin = static_cast<int>(std::lround(rel_deg / p.orientation_heading_bin_deg)) % bins;
+      for (Tally* t : tallies) {
+        ++t->robot.truths;
+        auto& dbin = t->robot_by_distance[distanceBin(r.distance_m)];
+        ++dbin.truths;
+        if (pi >= 0) {
+          ++t->robot.detected;
+          ++t->robot.true_positives;
+          ++dbin.detected;
+        }
+        if (err) {
+          ++t->robot.position_errors;
+          t->robot.position_error_sum += *err;
+          t->robot.position_error_sq += *err * *err;
+        }
+        if (pc.orientation_stage) {
+          ++t->orientation_raw[static_cast<int>(raw)];
+          ++t->orientation_filtered[static_cast<int>(filtered)];
+          auto& hb = t->orientation_by_heading[bin];
+          ++hb.first[static_cast<int>(raw)];
+          ++hb.second[static_cast<int>(filtered)];
+        }
+      }
+      if (pi < 0) {
+        ++frame_errors;
+        std::vector<Overlay> ov = {robotOverlay(r)};
+        if (pc.robot_proposals) {
+          for (const auto& prop : *pc.robot_proposals) {
+            if (boxIou(prop.box, r.box) > 0.05) {
+              Overlay o;
+              o.role = Overlay::Role::kProposal;
+              o.box = prop.box;
+              ov.push_back(o);
+            }
+          }
+        }
+        events.push_back({"missed_robot", r.visible_fraction, r.box, ov,
+                          "frame " + std::to_string(truth.frame_index) + ": missed robot " +
+                              std::to_string(r.index) + ", " + fmt(r.distance_m) + " m, visible " +
+                              fmt(100 * r.visible_fraction, 0) + " %"});
+      } else if (pc.orientation_stage && raw == OrientationClass::kFalsePositive) {
+        Overlay o;
+        o.role = Overlay::Role::kPercept;
+        o.box = percepts[pi].box;
+        o.label = "est " + fmt(percepts[pi].orientation_raw->angle_rad / kDeg, 0) + " deg";
+        events.push_back({"orientation", 1.0, r.box, {robotOverlay(r), o},
+                          "frame " + std::to_string(truth.frame_index) + ": orientation false positive, true " +
+                              fmt(r.heading_in_observer_rad / kDeg, 0) + " deg (observer frame), " +
+                              fmt(rel_deg, 0) + " deg to the line of sight"});
+      }
+    }
+    for (std::size_t pi = 0; pi < percepts.size(); ++pi) {
+      Overlay o;
+      o.role = Overlay::Role::kPercept;
+      o.box = percepts[pi].box;
+      frame_overlays.push_back(o);
+      if (m.percept_to_truth[pi] >= 0) continue;
+      for (Tally* t : tallies) ++t->robot.false_positives;
+      ++frame_errors;
+      events.push_back({"false_robot", percepts[pi].confidence, percepts[pi].box, {o},
+                        "frame " + std::to_string(truth.frame_index) + ": false robot, confidence " +
+                            fmt(percepts[pi].confidence)});
+    }
+  }
+
+  // Field lines and features.
+  if (pc.field_features) {
+    const auto& ff = *pc.field_features;
+    const auto& fi = truth.field;
+    for (Tally* t : tallies) ++t->field_frames;
+    std::vector<bool> line_hit(fi.lines.size(), false);
+    long false_lines = 0;
+    for (const auto& l : ff.lines) {
+      bool matched = false;
+      for (std::size_t k = 0; k < fi.lines.size(); ++k) {
+        if (segmentNear(l.start_px, l.end_px, fi.lines[k], p.line_match_max_px)) {
+          line_hit[k] = true;
+          matched = true;
+        }
+      }
+      if (!matched && !onCircle(l.start_px, l.end_px, fi.circle_pieces, p.line_match_max_px)) ++false_lines;
+    }
+    std::vector<MatchCandidate> cands;
+    for (std::size_t ti = 0; ti < fi.intersections.size(); ++ti) {
+      for (std::size_t pi = 0; pi < ff.intersections.size(); ++pi) {
+        if (ff.intersections[pi].type != fi.intersections[ti].type) continue;
+        const double d = (ff.intersections[pi].position_px - fi.intersections[ti].position_px).norm();
+        if (d <= p.intersection_match_max_px) cands.push_back({static_cast<int>(ti), static_cast<int>(pi), d});
+      }
+    }
+    const Matching mi = matchOneToOne(static_cast<int>(fi.intersections.size()),
+                                      static_cast<int>(ff.intersections.size()), cands);
+    std::vector<MatchCandidate> mark_cands;
+    for (std::size_t ti = 0; ti < fi.penalty_marks.size(); ++ti) {
+      for (std::size_t pi = 0; pi < ff.penalty_marks.size(); ++pi) {
+        const double d = (ff.penalty_marks[pi].centre_px - fi.penalty_marks[ti].position_px).norm();
+        if (d <= p.intersection_match_max_px) mark_cands.push_back({static_cast<int>(ti), static_cast<int>(pi), d});
+      }
+    }
+    const Matching mm = matchOneToOne(static_cast<int>(fi.penalty_marks.size()),
+                                      static_cast<int>(ff.penalty_marks.size()), mark_cands);
+    const bool circle_hit = fi.centre_circle_in_view && ff.centre_circle && fi.circle_centre_px &&
+                            (ff.centre_circle->centre_px - *fi.circle_centre_px).norm() <=
+                                p.intersection_match_max_px;
+    for (Tally* t : tallies) {
+      t->lines.truths += static_cast<long>(fi.lines.size());
+      t->lines.hits += std::count(line_hit.begin(), line_hit.end(), true);
+      t->lines.percepts += static_cast<long>(ff.lines.size());
+      t->lines.false_positives += false_lines;
+      t->intersections.truths += static_cast<long>(fi.intersections.size());
+      t->intersections.percepts += static_cast<long>(ff.intersections.size());
+      for (int v : mi.truth_to_percept) t->intersections.hits += v >= 0;
+      for (int v : mi.percept_to_truth) t->intersections.false_positives += v < 0;
+      t->marks.truths += static_cast<long>(fi.penalty_marks.size());
+      for (int v : mm.truth_to_percept) t->marks.hits += v >= 0;
+      if (fi.centre_circle_in_view) {
+        ++t->circle.truths;
+        t->circle.hits += circle_hit;
+      }
+    }
+  }
+  if (pc.pose_fit_stage) {
+    std::optional<double> err_mm;
+    if (pc.pose_in_field) {
+      err_mm = 1000 * std::hypot(pc.pose_in_field->x_m - truth.observer.x_m,
+                                 pc.pose_in_field->y_m - truth.observer.y_m);
+    }
+    for (Tally* t : tallies) {
+      ++t->pose_frames;
+      if (err_mm) {
+        ++t->pose_fits;
+        t->pose_error_sum_mm += *err_mm;
+        t->pose_error_sq_mm += *err_mm * *err_mm;
+      }
+    }
+  }
+
+  for (const auto& [stage, ms] : pc.stage_times_ms) {
+    for (Tally* t : tallies) {
+      auto& tt = t->timing[stage];
+      ++tt.n;
+      tt.sum += ms;
+      tt.max = std::max(tt.max, ms);
+    }
+  }
+
+  for (const auto& s : pc.classifier_samples) {
+    bool label = false;
+    if (s.object == ClassifierSample::Object::kBall) {
+      for (const auto& b : balls) label = label || ballMatchCost(b, s.centre_px, p).has_value();
+    } else {
+      for (const auto* r : robots) label = label || robotMatchCost(*r, s.box, feetInField(s.feet_px), p).has_value();
+    }
+    for (Tally* t : tallies) {
+      auto& c = t->classifiers[s.classifier];
+      ++c.samples;
+      c.correct += label == s.predicted_positive;
+      c.true_pos += label && s.predicted_positive;
+      c.false_pos += !label && s.predicted_positive;
+      c.false_neg += label && !s.predicted_positive;
+    }
+  }
+
+  if (!image || image->empty()) return;
+  // Keep the worst events per kind; render a crop only when it makes the cut.
+  auto offer = [&](const std::string& kind, double severity, int limit, auto render) {
+    auto& list = state_->gallery_by_kind[kind];
+    if (limit <= 0) return;
+    if (static_cast<int>(list.size()) >= limit && severity <= list.back().severity) return;
+    GalleryItem item = render();
+    item.kind = kind;
+    item.severity = severity;
+    item.frame = truth.frame_index;
+    list.push_back(std::move(item));
+    std::stable_sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.severity > b.severity; });
+    if (static_cast<int>(list.size()) > limit) list.pop_back();
+    state_->rebuildGallery();
+  };
+  for (const auto& e : events) {
+    offer(e.kind, e.severity, p.gallery_max_crops, [&] {
+      GalleryItem g;
+      g.caption = e.caption;
+      g.png_base64 = cropPngBase64(*image, e.region, e.overlays, kCropSizePx);
+      return g;
+    });
+  }
+  if (frame_errors > 0) {
+    offer("worst_frame", frame_errors, p.gallery_worst_frames, [&] {
+      GalleryItem g;
+      g.caption = "frame " + std::to_string(truth.frame_index) + ": " + std::to_string(frame_errors) +
+                  " misses and false detections (green truth, red percepts)";
+      g.png_base64 = cropPngBase64(*image, {0, 0, static_cast<double>(image->width()), static_cast<double>(image->height())},
+                                   frame_overlays, std::max(image->width(), kFrameThumbWidthPx));
+      return g;
+    });
+  }
+}
+
+nlohmann::json Scorer::results(const RunInfo& run) const {
+  json j = tallyJson(state_->total, params_);
+  j["scenario"] = run.scenario;
+  j["seed"] = run.seed;
+  j["frame_count"] = state_->total.frames;
+  j["code_version"] = run.code_version;
+  j["scoring"] = paramsJson(params_);
+  j["should_detect_rule"] = params_.shouldDetectRule();
+  j["matching_rule"] = params_.matchingRule();
+  json cases = json::array();
+  for (const auto& [info, tally] : state_->cases) {
+    json c = tallyJson(tally, params_);
+    c["name"] = info.name;
+    json settings = json::object();
+    for (const auto& [k, v] : info.numeric_settings) settings[k] = v;
+    for (const auto& [k, v] : info.text_settings) settings[k] = v;
+    c["settings"] = settings;
+    cases.push_back(c);
+  }
+  j["cases"] = cases;
+  return j;
+}
+
+}  // namespace colorfree

@@ -1,0 +1,33 @@
+#pragma once
+
+#include "colorfree/perception/image.h"
+
+namespace colorfree::cnn {
+
+/// An axis-aligned box in image pixels: top-left corner and size (pixel centres at integer + 0.5).
+struct PatchBox {
+  float x_px = 0.0f;
+  float y_px = 0.0f;
+  float width_px = 0.0f;
+  float height_px = 0.0f;
+};
+
+/// How grey values (0..255) become the net's input.
+enum class PatchNormalization {
+  kUnitRange,    ///< v / 255
+  kStandardize,  ///< (v − patch mean) / max(patch standard deviation, kMinStddev): lighting-invariant
+};
+
+/// Floor of the standard deviation in kStandardize, in grey levels, so flat patches stay bounded.
+inline constexpr float kMinStddev = 4.0f;
+
+/// Crops `box` from `image`, resamples it bilinearly to width × height (pixels outside the image
+/// repeat the border) and normalises it into `out` (width × height floats, rows top-down).
+/// No allocation. Throws colorfree::Error for an empty image, an empty box or a size > 256.
+void extractPatch(const GrayView& image, const PatchBox& box, int width, int height,
+                  PatchNormalization normalization, float* out);
+
+/// Normalises `count` grey values (0..255) in place.
+void normalizePatch(float* values, int count, PatchNormalization normalization);
+
+}  // namespace colorfree::cnn

@@ -1,0 +1,41 @@
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "colorfree/perception/cnn/net.h"
+
+namespace colorfree::cnn {
+
+/// One of the paper's five nets as shipped in perception/models (<stem>.cfg, <stem>.weights),
+/// with the paper's Table 1 figures (NAO V5) beside it.
+struct ShippedNet {
+  const char* name;  ///< the paper's name
+  const char* stem;  ///< file name without extension
+  int input_side;
+  std::array<const char*, 3> classes;  ///< label order; unused entries null
+  int paper_parameters;
+  double paper_time_ms;
+  double paper_accuracy;
+
+  std::vector<std::string> classNames() const {
+    std::vector<std::string> out;
+    for (const char* c : classes) {
+      if (c != nullptr) out.emplace_back(c);
+    }
+    return out;
+  }
+  std::string cfgPath() const { return defaultModelDir() + "/" + stem + ".cfg"; }
+  std::string weightsPath() const { return defaultModelDir() + "/" + stem + ".weights"; }
+};
+
+inline constexpr ShippedNet kShippedNets[] = {
+    {"RobotNet", "robot_net", 24, {"none", "robot", nullptr}, 884, 0.382, 0.969},
+    {"BoostBallNet", "boost_ball_net", 12, {"none", "ball", nullptr}, 125, 0.043, 0.965},
+    {"BallNet", "ball_net", 26, {"none", "ball", nullptr}, 444, 0.343, 0.984},
+    {"OriBoostNet", "ori_boost_net", 12, {"unusable", "usable", nullptr}, 246, 0.059, 0.962},
+    {"OriNet", "ori_net", 24, {"front", "back", "side"}, 657, 0.329, 0.984},
+};
+
+}  // namespace colorfree::cnn

@@ -1,0 +1,42 @@
+#pragma once
+
+#include <vector>
+
+#include "lane_kernels.h"
+
+namespace colorfree::cnn::detail {
+
+/// Runs a net forward on kLanes samples at once, keeping every layer's output (the trainer's
+/// backward pass reads them). All buffers are allocated once, in the constructor.
+class LaneRunner {
+ public:
+  /// `fuse`: run a convolution and the max pool after it as one step, without storing the
+  /// convolution's output (for inference; the trainer needs every output).
+  explicit LaneRunner(const Net& net, bool fuse = false);
+
+  /// Re-reads the weights from the net's parameters (after a training step).
+  void repack();
+  /// Input of kLanes samples, batch in lanes, layout of the net's input shape.
+  Vec* input() { return input_.data(); }
+  const Vec* input() const { return input_.data(); }
+  /// Fills the input from `count` ≤ kLanes samples of input().size() floats each (channel-major,
+  /// then rows: the Darknet / cv::dnn order); unused lanes are zero.
+  void setInput(const float* samples, int count);
+  void forward();
+  const Vec* output(int layer) const { return outputs_[layer].data(); }
+  Vec* output(int layer) { return outputs_[layer].data(); }
+  const Vec* inputOf(int layer) const { return layer == 0 ? input_.data() : outputs_[layer - 1].data(); }
+  const float* packed(int layer) const { return packed_[layer].data(); }
+  const Net& net() const { return net_; }
+
+ private:
+  const Net& net_;
+  std::vector<Vec> input_;
+  std::vector<std::vector<Vec>> outputs_;
+  std::vector<std::vector<float>> packed_;
+  std::vector<std::vector<const Vec*>> route_sources_;
+  std::vector<std::vector<int>> route_channels_;
+  std::vector<bool> fused_;  ///< layer i is a convolution fused with the max pool i + 1
+};
+
+}  // namespace colorfree::cnn::detail

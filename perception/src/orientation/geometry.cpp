@@ -1,0 +1,112 @@
+#include "colorfree/perception/orientation/geometry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace colorfree {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+double cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+}  // namespace
+
+std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points) {
+  std::sort(points.begin(), points.end(), [](const auto& p, const auto& q) {
+    return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y());
+  });
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  const std::size_t n = points.size();
+  if (n < 3) return points;
+  std::vector<Eigen::Vector2d> hull(2 * n);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {  // lower hull
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  for (std::size_t i = n - 1, t = k + 1; i-- > 0;) {  // upper hull
+    while (k >= t && cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+int countLineVotes(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                   const std::vector<Eigen::Vector2d>& points, double max_distance,
+                   double margin) {
+  const Eigen::Vector2d d = b - a;
+  const double length = d.norm();
+  if (length <= 0) return 0;
+  const Eigen::Vector2d u = d / length;
+  int votes = 0;
+  for (const auto& p : points) {
+    const Eigen::Vector2d ap = p - a;
+    const double along = ap.dot(u);
+    const double across = std::abs(ap.x() * u.y() - ap.y() * u.x());
+    if (across <= max_distance && along >= -margin && along <= length + margin) ++votes;
+  }
+  return votes;
+}
+
+SilhouetteLines findSilhouetteLines(const std::vector<Eigen::Vector2d>& points,
+                                    const SilhouetteLineBounds& bounds) {
+  SilhouetteLines out;
+  const std::vector<Eigen::Vector2d> hull = convexHull(points);
+  if (hull.size() < 2) return out;
+  std::vector<LineHypothesis> candidates;
+  const std::size_t edges = hull.size() == 2 ? 1 : hull.size();
+  for (std::size_t i = 0; i < edges; ++i) {
+    LineHypothesis h;
+    h.a = hull[i];
+    h.b = hull[(i + 1) % hull.size()];
+    h.votes = countLineVotes(h.a, h.b, points, bounds.vote_distance);
+    candidates.push_back(h);
+  }
+  // Most votes first; ties go to the longer line, then to hull order (stable).
+  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& p, const auto& q) {
+    return p.votes > q.votes || (p.votes == q.votes && p.length() > q.length());
+  });
+  out.first = candidates.front();
+  const Eigen::Vector2d first_dir = out.first->direction();
+  for (std::size_t i = 1; i < candidates.size(); ++i) {
+    const auto& c = candidates[i];
+    const double len = c.length();
+    if (len < bounds.min_length || len > bounds.max_length) continue;
+    if (std::abs(c.direction().dot(first_dir)) > bounds.max_orthogonality_cos) continue;
+    out.second = c;
+    break;
+  }
+  return out;
+}
+
+double wrapAngle(double a) {
+  a = std::fmod(a, 2 * kPi);
+  if (a <= -kPi) a += 2 * kPi;
+  if (a > kPi) a -= 2 * kPi;
+  return a;
+}
+
+std::optional<double> circularMedian(const std::vector<double>& angles, bool axial) {
+  if (angles.empty()) return std::nullopt;
+  // Axial data: double the angles, take the directional median, halve back.
+  const double scale = axial ? 2.0 : 1.0;
+  double best = 0;
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (double candidate : angles) {
+    double cost = 0;
+    for (double a : angles) cost += std::abs(wrapAngle(scale * (a - candidate)));
+    if (cost < best_cost - 1e-12) {
+      best_cost = cost;
+      best = candidate;
+    }
+  }
+  if (!axial) return wrapAngle(best);
+  double r = wrapAngle(2 * best) / 2;  // in (-π/2, π/2]
+  return r;
+}
+
+}  // namespace colorfree

@@ -1,0 +1,205 @@
+// Darknet cfg/weights reading and writing, the shipped nets' sizes, bad model files, patches.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "colorfree/perception/cnn/classifier.h"
+#include "colorfree/perception/cnn/net.h"
+#include "colorfree/perception/cnn/patch.h"
+#include "colorfree/perception/error.h"
+#include "test_support.h"
+
+namespace colorfree::cnn {
+namespace {
+
+std::string model(const std::string& name) { return defaultModelDir() + "/" + name; }
+
+std::string tempPath(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// Expects a colorfree::Error whose message contains every one of `parts`.
+template <typename F>
+void expectError(F&& f, std::initializer_list<std::string> parts) {
+  try {
+    f();
+    ADD_FAILURE() << "no colorfree::Error thrown";
+  } catch (const Error& e) {
+    for (const auto& p : parts) EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+  }
+}
+
+struct PaperNet {
+  const char* file;
+  int input_side;
+  int classes;
+  int paper_params;
+};
+
+constexpr PaperNet kPaperNets[] = {
+    {"robot_net.cfg", 24, 2, 884},   {"boost_ball_net.cfg", 12, 2, 125},
+    {"ball_net.cfg", 26, 2, 444},    {"ori_boost_net.cfg", 12, 2, 246},
+    {"ori_net.cfg", 24, 3, 657},
+};
+
+TEST(CnnNet, ShippedNetsHaveThePapersSizesAndParameterCounts) {
+  for (const PaperNet& p : kPaperNets) {
+    SCOPED_TRACE(p.file);
+    const Net net = readDarknetCfg(model(p.file));
+    EXPECT_EQ(net.input(), (Shape{p.input_side, p.input_side, 1}));
+    EXPECT_EQ(net.classes(), p.classes);
+    // Within 6 % of the paper's count (the architectures are rebuilt from the paper's description).
+    const double ratio = static_cast<double>(net.parameterCount()) / p.paper_params;
+    EXPECT_GT(ratio, 0.94) << net.parameterCount();
+    EXPECT_LT(ratio, 1.06) << net.parameterCount();
+    // Extended Fire modules: at least one route concatenating two or more branches.
+    bool has_fire = false;
+    for (const Layer& l : net.layers()) has_fire |= l.type == LayerType::kRoute && l.inputs.size() >= 2;
+    EXPECT_TRUE(has_fire);
+    EXPECT_EQ(net.layers().back().type, LayerType::kSoftmax);
+  }
+}
+
+TEST(CnnNet, ParameterCountOfAHandCountedNet) {
+  // conv 3x3 1->4: 4*(9+1)=40; route; conv 1x1 4->2 on 8x8: 2*(4+1)=10; connected 2*4*4 -> 3: 3*(32+1)=99.
+  const Net net = parseDarknetCfg(
+      "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=4\nsize=3\npad=1\n"
+      "activation=leaky\n[convolutional]\nfilters=2\nsize=1\n[maxpool]\nsize=2\nstride=2\n"
+      "[connected]\noutput=3\n[softmax]\n",
+      "inline");
+  EXPECT_EQ(net.parameterCount(), 40u + 10u + 99u);
+  EXPECT_EQ(net.layers()[2].out, (Shape{4, 4, 2}));
+  EXPECT_EQ(net.multiplyAdds(), 64 * 4 * 9 + 64 * 2 * 4 + 3 * 32);
+}
+
+TEST(CnnNet, CfgAndWeightsRoundTrip) {
+  Net net = readDarknetCfg(model("robot_net.cfg"));
+  net.initialise(3);
+  writeDarknetCfg(net, tempPath("rt.cfg"));
+  writeDarknetWeights(net, tempPath("rt.weights"));
+  const Net back = readDarknet(tempPath("rt.cfg"), tempPath("rt.weights"));
+  EXPECT_EQ(back.params(), net.params());
+  EXPECT_EQ(darknetCfgText(back), darknetCfgText(net));
+  EXPECT_EQ(back.normalization(), PatchNormalization::kStandardize);
+  EXPECT_FALSE(std::filesystem::exists(tempPath("rt.weights.tmp")));
+}
+
+TEST(CnnNet, InitialisationIsSeeded) {
+  Net a = readDarknetCfg(model("ori_net.cfg")), b = a, c = a;
+  a.initialise(7);
+  b.initialise(7);
+  c.initialise(8);
+  EXPECT_EQ(a.params(), b.params());
+  EXPECT_NE(a.params(), c.params());
+}
+
+class CnnBadFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    net_ = readDarknetCfg(model("boost_ball_net.cfg"));
+    net_.initialise(1);
+    writeDarknetCfg(net_, cfg_);
+    writeDarknetWeights(net_, weights_);
+  }
+  Net net_;
+  std::string cfg_ = tempPath("bad.cfg");
+  std::string weights_ = tempPath("bad.weights");
+};
+
+TEST_F(CnnBadFiles, TruncatedWeights) {
+  std::filesystem::resize_file(weights_, std::filesystem::file_size(weights_) - 6);
+  expectError([&] { readDarknet(cfg_, weights_); }, {weights_, "truncated"});
+  std::filesystem::resize_file(weights_, 10);
+  expectError([&] { readDarknet(cfg_, weights_); }, {weights_, "truncated"});
+}
+
+TEST_F(CnnBadFiles, WeightsOfAnotherNet) {
+  // BallNet's cfg with BoostBallNet's weights: more parameters needed than present.
+  expectError([&] { readDarknet(model("ball_net.cfg"), weights_); }, {weights_, "truncated"});
+  // And the other way round: the file holds more than the cfg needs.
+  Net big = readDarknetCfg(model("ball_net.cfg"));
+  writeDarknetWeights(big, tempPath("big.weights"));
+  expectError([&] { readDarknet(cfg_, tempPath("big.weights")); },
+              {tempPath("big.weights"), "do not match"});
+}
+
+TEST_F(CnnBadFiles, NonFiniteWeight) {
+  net_.params()[5] = std::nanf("");
+  writeDarknetWeights(net_, weights_);
+  expectError([&] { readDarknet(cfg_, weights_); }, {weights_, "weight 5", "finite"});
+}
+
+TEST_F(CnnBadFiles, UnknownLayerAndKeys) {
+  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[shortcut]\nfrom=-3\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_ + ":5", "[shortcut]", "not supported"});
+  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=2\nsize=3\nflip=1\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_ + ":8", "flip"});
+  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=2\nactivation=mish\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_, "mish"});
+  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=x2\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_ + ":6", "not an integer"});
+  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=2\nsize=11\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_, "larger than"});
+  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[route]\nlayers=-1\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_, "route"});
+  writeText(cfg_, "[convolutional]\nfilters=2\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_, "[net]"});
+  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nbatch_normalize=1\n");
+  expectError([&] { readDarknetCfg(cfg_); }, {cfg_, "batch_normalize"});
+  expectError([&] { readDarknetCfg(tempPath("missing.cfg")); }, {"missing.cfg"});
+}
+
+TEST(CnnPatch, ExtractsAndNormalises) {
+  GrayImage image(40, 30);
+  for (int y = 0; y < 30; ++y) {
+    for (int x = 0; x < 40; ++x) image.at(x, y) = static_cast<std::uint8_t>(x * 5);
+  }
+  // A box of 8x8 pixels sampled at 8x8: exact pixel values.
+  float out[64];
+  extractPatch(image.view(), {10, 5, 8, 8}, 8, 8, PatchNormalization::kUnitRange, out);
+  for (int v = 0; v < 8; ++v) {
+    for (int u = 0; u < 8; ++u) EXPECT_FLOAT_EQ(out[v * 8 + u], (10 + u) * 5 / 255.0f);
+  }
+  // Downscaled by two: samples between pixel pairs, a linear ramp stays linear.
+  extractPatch(image.view(), {10, 5, 16, 16}, 8, 8, PatchNormalization::kUnitRange, out);
+  EXPECT_FLOAT_EQ(out[0], (10.5f * 5) / 255.0f);
+  EXPECT_FLOAT_EQ(out[7], (24.5f * 5) / 255.0f);
+  // Standardised: zero mean, unit deviation, whatever the brightness.
+  extractPatch(image.view(), {10, 5, 16, 16}, 8, 8, PatchNormalization::kStandardize, out);
+  double sum = 0, sq = 0;
+  for (float v : out) sum += v, sq += v * v;
+  EXPECT_NEAR(sum / 64, 0.0, 1e-5);
+  EXPECT_NEAR(sq / 64, 1.0, 1e-4);
+  // Outside the image: the border repeats.
+  extractPatch(image.view(), {-20, -20, 8, 8}, 8, 8, PatchNormalization::kUnitRange, out);
+  EXPECT_FLOAT_EQ(out[63], 0.0f);
+  expectError([&] { extractPatch(image.view(), {0, 0, 0, 8}, 8, 8, PatchNormalization::kUnitRange, out); },
+              {"positive size"});
+}
+
+TEST(CnnClassifier, SinglePatchesAndBatchesGiveTheSameProbabilities) {
+  Net net = readDarknetCfg(model("ori_net.cfg"));
+  net.initialise(2);
+  const Classifier classifier(net);
+  const int n = net.input().size(), k = net.classes(), count = 37;
+  std::vector<float> inputs(static_cast<std::size_t>(count) * n);
+  for (std::size_t i = 0; i < inputs.size(); ++i) inputs[i] = std::sin(0.37f * i);
+  std::vector<float> batch(count * k), single(k);
+  classifier.run(inputs.data(), count, batch.data());
+  for (int b = 0; b < count; ++b) {
+    classifier.run(inputs.data() + b * n, 1, single.data());
+    float sum = 0.0f;
+    for (int c = 0; c < k; ++c) {
+      EXPECT_NEAR(single[c], batch[b * k + c], 1e-6f);
+      sum += single[c];
+    }
+    EXPECT_NEAR(sum, 1.0f, 1e-5f);
+  }
+}
+
+}  // namespace
+}  // namespace colorfree::cnn

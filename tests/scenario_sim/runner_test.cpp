@@ -1,0 +1,225 @@
+#include "colorfree/sim/runner.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "colorfree/perception/error.h"
+#include "test_support.h"
+
+namespace colorfree::sim {
+namespace {
+
+// A renderer that draws the ball as a bright column, 1 px per mm of its x, on a dark image, and
+// remembers what it was told. Lets the runner's timing be checked without MuJoCo.
+struct FakeLog {
+  int scenes_made = 0;
+  int renders = 0;
+  int object_map_renders = 0;
+  std::vector<double> lighting;
+};
+
+class FakeRenderer : public SceneRenderer {
+ public:
+  FakeRenderer(const SceneSpec& spec, FakeLog& log) : spec_(spec), log_(log) { ++log_.scenes_made; }
+  void setObserver(const RobotMotionState& motion, const HeadAngles& head) override {
+    observer_ = motion.pose;
+    head_ = head;
+  }
+  void setRobot(int index, const RobotMotionState&) override {
+    ASSERT_LT(index, spec_.robot_count);
+  }
+  void setBall(const BallMotionState& ball) override { ball_x_ = ball.position_m.x(); }
+  void setLighting(const LightingState& lighting) override {
+    log_.lighting.push_back(lighting.intensity_scale);
+  }
+  CameraModel cameraModel(NaoCamera, int w, int h) const override {
+    CameraPose pose;
+    pose.height_m = 0.5;
+    pose.yaw_rad = head_.yaw_rad;
+    return CameraModel(CameraIntrinsics::fromHorizontalFov(w, h, 1.0), pose);
+  }
+  Eigen::Isometry3d cameraToField(NaoCamera camera) const override {
+    return robotToField(observer_) * cameraModel(camera, 16, 12).cameraToRobot();
+  }
+  RenderOutput render(NaoCamera, int w, int h, bool object_map) override {
+    ++log_.renders;
+    RenderOutput out;
+    out.gray = GrayImage(w, h, 20);
+    const int column = static_cast<int>(std::floor(ball_x_ * 1000));
+    if (object_map) {
+      ++log_.object_map_renders;
+      out.object_map.width = w;
+      out.object_map.height = h;
+      out.object_map.labels.assign(static_cast<std::size_t>(w) * h, kObjectCarpet);
+    }
+    for (int y = 0; y < h; ++y) {
+      if (spec_.ball && column >= 0 && column < w) {
+        out.gray.at(column, y) = 220;
+        if (object_map)
+          out.object_map.labels[static_cast<std::size_t>(y) * w + column] = kObjectBall;
+      }
+    }
+    return out;
+  }
+
+ private:
+  SceneSpec spec_;
+  FakeLog& log_;
+  FieldPose observer_;
+  HeadAngles head_;
+  double ball_x_ = 0;
+};
+
+RendererFactory fakeFactory(FakeLog& log) {
+  return [&log](const SceneSpec& spec) -> std::unique_ptr<SceneRenderer> {
+    return std::make_unique<FakeRenderer>(spec, log);
+  };
+}
+
+std::string scenario(const std::string& extra) {
+  return R"(name: fake
+camera: top
+resolution: [200, 16]
+frames: 3
+frame_rate_hz: 10
+seed: 3
+observer: {x_m: -1, y_m: 0, heading_deg: 0, head: {yaw_deg: 10}}
+robots:
+  - {x_m: 1, y_m: 0, heading_deg: 180, motion: {type: walk, speed_mps: 0.1}}
+ball: {x_m: 0.0502, y_m: 0, velocity_x_mps: 1.0, deceleration_mps2: 0}
+lighting: {preset: normal}
+)" + extra;
+}
+
+int brightColumn(const GrayImage& g, int row) {
+  int best = -1;
+  for (int x = 0; x < g.width(); ++x) {
+    if (g.at(x, row) > 200) best = x;
+  }
+  return best;
+}
+
+TEST(RunnerTest, FrameTruthFollowsTheScenario) {
+  FakeLog log;
+  ScenarioRunner runner(Scenario::parse(scenario(""), "fake.yaml"), fakeFactory(log));
+  const RenderedFrame f = runner.render(0, 1);
+  EXPECT_EQ(f.frame_index, 1);
+  EXPECT_DOUBLE_EQ(f.truth.time_s, 0.1);
+  ASSERT_EQ(f.truth.robots.size(), 1u);
+  EXPECT_NEAR(f.truth.robots[0].pose.x_m, 1 - 0.01, test::kMetreTolerance);
+  EXPECT_EQ(f.truth.robots[0].posture, "walking");
+  EXPECT_DOUBLE_EQ(f.truth.robots[0].speed_mps, 0.1);
+  EXPECT_TRUE(f.truth.ball.present);
+  EXPECT_NEAR(f.truth.ball.position_m.x(), 0.1502, test::kMetreTolerance);
+  EXPECT_NEAR(f.truth.observer_head_yaw_rad, 10 * std::numbers::pi / 180, 1e-12);
+  EXPECT_EQ(f.truth.camera.name, "top");
+  EXPECT_EQ(f.truth.camera.model.width(), 200);
+  EXPECT_NEAR(f.truth.camera.camera_to_field.translation().x(), -1, test::kMetreTolerance);
+  // The image and the object map show the ball where the truth has it.
+  EXPECT_EQ(brightColumn(f.image, 0), 150);
+  ASSERT_EQ(f.truth.object_map.labels.size(), 200u * 16u);
+  EXPECT_EQ(f.truth.object_map.at(150, 5), kObjectBall);
+  EXPECT_EQ(log.renders, 1);
+  EXPECT_EQ(runner.render(0, 2, false).truth.object_map.labels.size(), 0u);
+}
+
+TEST(RunnerTest, MotionBlurAveragesSubframesAcrossTheExposure) {
+  FakeLog log;
+  ScenarioRunner runner(
+      Scenario::parse(scenario("effects: {exposure_ms: 20, blur_subframes: 4}\n"), "fake.yaml"),
+      fakeFactory(log));
+  const RenderedFrame f = runner.render(0, 1);
+  // Sub-frames at -7.5, -2.5, 2.5, 7.5 ms: the ball at 142.7, 147.7, 152.7, 157.7 mm.
+  for (int x : {142, 147, 152, 157}) EXPECT_EQ(f.image.at(x, 3), 20 + 200 / 4) << x;
+  EXPECT_EQ(f.image.at(150, 3), 20);
+  EXPECT_EQ(log.renders, 5);  // four sub-frames and the object map at the frame time
+  EXPECT_EQ(f.truth.object_map.at(150, 3), kObjectBall);
+}
+
+TEST(RunnerTest, RollingShutterSkewsAMovingBall) {
+  FakeLog log;
+  ScenarioRunner runner(Scenario::parse(scenario("effects: {rolling_shutter: true, readout_ms: 16, "
+                                                 "rolling_shutter_bands: 16}\n"),
+                                        "fake.yaml"),
+                        fakeFactory(log));
+  const RenderedFrame f = runner.render(0, 1, false);
+  // Row y is read at (y + 0.5) ms - 8 ms: the ball moves 1 mm (1 px) per row.
+  for (int y = 0; y < 16; ++y) {
+    EXPECT_EQ(brightColumn(f.image, y), static_cast<int>(std::floor(150 + (y + 0.5) - 8))) << y;
+  }
+  EXPECT_EQ(log.renders, 16);
+}
+
+TEST(RunnerTest, SameScenarioSameBytes) {
+  const std::string text =
+      scenario("effects: {noise_sigma: 3, shot_noise: 0.2, exposure_ms: 10, blur_subframes: 2}\n");
+  FakeLog log_a, log_b;
+  ScenarioRunner a(Scenario::parse(text, "fake.yaml"), fakeFactory(log_a));
+  ScenarioRunner b(Scenario::parse(text, "fake.yaml"), fakeFactory(log_b));
+  for (int k : {0, 2, 1}) EXPECT_EQ(a.render(0, k).image.pixels(), b.render(0, k).image.pixels());
+  EXPECT_NE(a.render(0, 0).image.pixels(), a.render(0, 1).image.pixels());
+}
+
+TEST(RunnerTest, SceneIsRebuiltOnlyWhenTheCaseNeedsAnother) {
+  FakeLog log;
+  ScenarioRunner runner(
+      Scenario::parse(scenario("sweep:\n  - path: lighting.scale\n    values: [0.5, 1.5]\n"),
+                      "fake.yaml"),
+      fakeFactory(log));
+  runner.render(0, 0);
+  runner.render(1, 0);
+  EXPECT_EQ(log.scenes_made, 1);
+  EXPECT_DOUBLE_EQ(log.lighting.front(), 0.5);
+  EXPECT_DOUBLE_EQ(log.lighting.back(), 1.5);
+
+  FakeLog log2;
+  ScenarioRunner presets(
+      Scenario::parse(scenario("sweep:\n  - path: lighting.preset\n    values: [dim, uneven]\n"),
+                      "fake.yaml"),
+      fakeFactory(log2));
+  int frames = 0;
+  for (int k = 0; k < presets.caseCount(); ++k) {
+    presets.runCase(k, -1, false, [&](const RenderedFrame& f) {
+      EXPECT_EQ(f.case_index, k);
+      EXPECT_EQ(f.frame_index, frames % 3);
+      ++frames;
+    });
+  }
+  EXPECT_EQ(frames, 6);
+  EXPECT_EQ(log2.scenes_made, 2);
+}
+
+TEST(RunnerTest, FlickerChangesTheLightOverFrames) {
+  FakeLog log;
+  std::string text = scenario("");
+  text.replace(text.find("{preset: normal}"), 16,
+               "{preset: normal, scale: 2, flicker_amplitude: 0.3, flicker_frequency_hz: 2.5}");
+  ScenarioRunner runner(Scenario::parse(text, "fake.yaml"), fakeFactory(log));
+  runner.render(0, 0);
+  runner.render(0, 1);  // a quarter period later: the peak
+  EXPECT_DOUBLE_EQ(log.lighting[0], 2.0);
+  EXPECT_NEAR(log.lighting[1], 2.6, 1e-12);
+
+  // The flicker preset follows the world's flicker of each frame.
+  FakeLog preset_log;
+  std::string preset = scenario("");
+  preset.replace(preset.find("{preset: normal}"), 16, "{preset: flicker, scale: 0.5}");
+  ScenarioRunner flicker(Scenario::parse(preset, "fake.yaml"), fakeFactory(preset_log));
+  for (int k = 0; k < 3; ++k) flicker.render(0, k);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_DOUBLE_EQ(preset_log.lighting[static_cast<std::size_t>(k)], 0.5 * flickerScale(3, k));
+  }
+  EXPECT_NE(preset_log.lighting[0], preset_log.lighting[1]);
+}
+
+TEST(RunnerTest, BadCaseOrFrameIsAnError) {
+  FakeLog log;
+  ScenarioRunner runner(Scenario::parse(scenario(""), "fake.yaml"), fakeFactory(log));
+  EXPECT_THROW(runner.render(1, 0), Error);
+  EXPECT_THROW(runner.render(0, -1), Error);
+}
+
+}  // namespace
+}  // namespace colorfree::sim

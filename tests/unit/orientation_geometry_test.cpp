@@ -1,0 +1,157 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "colorfree/perception/orientation/geometry.h"
+#include "colorfree/perception/orientation/orientation_filter.h"
+
+namespace colorfree {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+double deg(double d) { return d * kPi / 180; }
+
+TEST(ConvexHull, SquareWithInteriorAndCollinearPoints) {
+  std::vector<Eigen::Vector2d> pts = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5},
+                                      {0.5, 0}, {0.2, 0.7}, {1, 0.5}, {0, 0}};
+  const auto hull = convexHull(pts);
+  ASSERT_EQ(hull.size(), 4u);
+  EXPECT_EQ(hull[0], Eigen::Vector2d(0, 0));
+  EXPECT_EQ(hull[1], Eigen::Vector2d(1, 0));
+  EXPECT_EQ(hull[2], Eigen::Vector2d(1, 1));
+  EXPECT_EQ(hull[3], Eigen::Vector2d(0, 1));
+}
+
+TEST(ConvexHull, DegenerateInputs) {
+  EXPECT_TRUE(convexHull({}).empty());
+  EXPECT_EQ(convexHull({{1, 2}, {1, 2}}).size(), 1u);
+  // All collinear: the two ends.
+  const auto line = convexHull({{0, 0}, {1, 1}, {2, 2}, {3, 3}});
+  ASSERT_EQ(line.size(), 2u);
+  EXPECT_EQ(line[0], Eigen::Vector2d(0, 0));
+  EXPECT_EQ(line[1], Eigen::Vector2d(3, 3));
+}
+
+TEST(LineVotes, CountsPointsNearTheSegmentOnly) {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i <= 10; ++i) pts.push_back({i * 0.1, 0.004 * (i % 2)});  // on the line
+  pts.push_back({0.5, 0.05});   // too far across
+  pts.push_back({1.5, 0.0});    // beyond the end
+  EXPECT_EQ(countLineVotes({0, 0}, {1, 0}, pts, 0.005), 11);
+  EXPECT_EQ(countLineVotes({0, 0}, {1, 0}, pts, 0.06), 12);
+  EXPECT_EQ(countLineVotes({0, 0}, {1, 0}, pts, 0.005, 0.6), 12);
+}
+
+TEST(SilhouetteLines, FindsTheLongEdgeThenTheOrthogonalShortOne) {
+  // An L of silhouette points: a long edge of 0.25 m along x, a short one of 0.09 m along y.
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i <= 25; ++i) pts.push_back({i * 0.01, 0});
+  for (int i = 1; i <= 9; ++i) pts.push_back({0.25, i * 0.01});
+  SilhouetteLineBounds bounds;
+  bounds.vote_distance = 0.003;
+  const auto lines = findSilhouetteLines(pts, bounds);
+  ASSERT_TRUE(lines.first);
+  EXPECT_NEAR(std::abs(lines.first->direction().x()), 1.0, 1e-9);
+  EXPECT_EQ(lines.first->votes, 26);
+  ASSERT_TRUE(lines.second);
+  EXPECT_NEAR(std::abs(lines.second->direction().y()), 1.0, 1e-9);
+  EXPECT_NEAR(lines.second->length(), 0.09, 1e-9);
+}
+
+TEST(SilhouetteLines, NoSecondLineWhenNothingIsOrthogonal) {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i <= 20; ++i) pts.push_back({i * 0.01, 0.001 * (i % 3)});
+  const auto lines = findSilhouetteLines(pts, {});
+  ASSERT_TRUE(lines.first);
+  EXPECT_FALSE(lines.second);
+}
+
+TEST(CircularMedian, WrapsAroundPlusMinusPi) {
+  // Samples around 180°: a linear median would give about 0.
+  const std::vector<double> a = {deg(170), deg(-175), deg(178), deg(-170), deg(175)};
+  const double m = *circularMedian(a);
+  EXPECT_NEAR(std::abs(m), deg(178), 1e-12);
+  EXPECT_FALSE(circularMedian({}));
+}
+
+TEST(CircularMedian, RejectsAnOutlier) {
+  const std::vector<double> a = {deg(10), deg(12), deg(-150), deg(11), deg(9)};
+  EXPECT_NEAR(*circularMedian(a), deg(10), 1e-12);
+}
+
+TEST(CircularMedian, AxialTreatsOppositeAnglesAsOne) {
+  const std::vector<double> a = {deg(88), deg(-91), deg(92), deg(-89), deg(90)};
+  const double m = *circularMedian(a, /*axial=*/true);
+  EXPECT_NEAR(std::abs(wrapAngle(2 * (m - deg(90)))) / 2, 0, deg(1.01));
+  EXPECT_GT(m, -kPi / 2);
+  EXPECT_LE(m, kPi / 2);
+}
+
+TEST(WrapAngle, HalfOpenInterval) {
+  EXPECT_NEAR(wrapAngle(3 * kPi), kPi, 1e-12);
+  EXPECT_NEAR(wrapAngle(-kPi), kPi, 1e-12);
+  EXPECT_NEAR(wrapAngle(deg(370)), deg(10), 1e-12);
+}
+
+TEST(OrientationFromLine, FrontFacesTheObserverBackFacesAway) {
+  // A robot 1.2 m ahead; its toe line runs along y.
+  const Eigen::Vector2d pos(1.2, 0);
+  const auto front = orientationFromLine({1.1, -0.1}, {1.1, 0.1}, RobotSide::kFront, pos);
+  EXPECT_TRUE(front.facing_known);
+  EXPECT_NEAR(std::abs(front.angle_rad), kPi, 1e-12);  // facing the observer: towards −x
+  const auto back = orientationFromLine({1.1, -0.1}, {1.1, 0.1}, RobotSide::kBack, pos);
+  EXPECT_NEAR(back.angle_rad, 0, 1e-12);
+  const auto side = orientationFromLine({1.1, -0.1}, {1.1, 0.1}, RobotSide::kSide, pos);
+  EXPECT_FALSE(side.facing_known);
+  EXPECT_NEAR(std::abs(side.angle_rad), kPi / 2, 1e-12);
+}
+
+TEST(ConsistencyCheck, AtMostOneOfEachClass) {
+  EXPECT_TRUE(classesConsistent({RobotSide::kFront, RobotSide::kSide}));
+  EXPECT_FALSE(classesConsistent({RobotSide::kSide, RobotSide::kSide}));
+  EXPECT_FALSE(combineLineOrientations({{0, true}, {0.1, true}},
+                                       {RobotSide::kFront, RobotSide::kFront}));
+  // Front and back that disagree on the facing are rejected.
+  EXPECT_FALSE(combineLineOrientations({{0, true}, {kPi, true}},
+                                       {RobotSide::kFront, RobotSide::kBack}));
+  const auto both = combineLineOrientations({{1.0, false}, {0.5, true}},
+                                            {RobotSide::kSide, RobotSide::kFront});
+  ASSERT_TRUE(both);
+  EXPECT_TRUE(both->facing_known);
+  EXPECT_DOUBLE_EQ(both->angle_rad, 0.5);
+}
+
+TEST(OrientationTrack, MedianOverElevenAndExpiry) {
+  OrientationTrack track;
+  OrientationFilterParams params;
+  std::optional<RobotOrientation> out;
+  for (int i = 0; i < 15; ++i) {
+    // Every fifth sample is a flipped outlier.
+    const double a = i % 5 == 0 ? deg(-178) : deg(2 + 0.1 * i);
+    out = updateOrientationTrack(track, RobotOrientation{a, true}, 0.1 * i, params);
+  }
+  EXPECT_EQ(track.samples.size(), 11u);
+  ASSERT_TRUE(out);
+  EXPECT_TRUE(out->facing_known);
+  EXPECT_NEAR(out->angle_rad, deg(2.9), deg(0.35));
+  // Without new samples the estimate expires.
+  EXPECT_TRUE(updateOrientationTrack(track, std::nullopt, 1.45, params));
+  EXPECT_FALSE(updateOrientationTrack(track, std::nullopt, 3.0, params));
+}
+
+TEST(OrientationTrack, MostlyAxialSamplesGiveOnlyTheAxis) {
+  OrientationTrack track;
+  std::optional<RobotOrientation> out;
+  for (int i = 0; i < 6; ++i) {
+    out = updateOrientationTrack(track, RobotOrientation{i % 2 ? deg(89) : deg(-91), false},
+                                 0.05 * i, {});
+  }
+  out = updateOrientationTrack(track, RobotOrientation{deg(90), true}, 0.4, {});
+  ASSERT_TRUE(out);
+  EXPECT_FALSE(out->facing_known);
+  EXPECT_NEAR(std::abs(out->angle_rad), deg(89), deg(2.01));
+}
+
+}  // namespace
+}  // namespace colorfree
