@@ -8,4 +8,7 @@ namespace colorfree::app {
 // expectation not met) and throws colorfree::Error on bad input (exit 2). main.cpp lists them in
 // the order --help shows them.
 
+void addRenderCommand(CLI::App& app, int& exit_code);
+void addRunCommand(CLI::App& app, int& exit_code);
+
 }  // namespace colorfree::app

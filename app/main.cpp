@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   (void)exit_code;
   colorfree::app::addRenderCommand(app, exit_code);
+  colorfree::app::addRunCommand(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
