@@ -418,7 +418,7 @@ double visibleLength(const ObjectMap& map, bool use_map, const Eigen::Vector2d& 
 }
 
 FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool use_map,
-                          const FieldModel& model, const ScoringParams& params) {
+                          const FieldMarkings& model, const ScoringParams& params) {
   FieldInImage f;
   const int win = params.feature_visibility_window_px;
   for (const auto& line : model.lines) {
@@ -461,7 +461,7 @@ FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool 
 
 }  // namespace
 
-FrameTruth computeFrameTruth(const WorldState& world, const FieldModel& field,
+FrameTruth computeFrameTruth(const WorldState& world, const FieldMarkings& field,
                              const FieldDimensions& dims, const ScoringParams& params) {
   FrameTruth t;
   t.frame_index = world.frame_index;

@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "colorfree/groundtruth/field_model.h"
+#include "colorfree/groundtruth/field_markings.h"
 #include "colorfree/groundtruth/truth_in_image.h"
 #include "colorfree/sim/world.h"
 #include "test_support.h"
@@ -109,7 +109,7 @@ FrameTruth renderAndProject(World& world, NaoCamera cam, const FieldPose& observ
   world.setBall(ball, Eigen::Quaterniond::Identity());
   WorldState s = renderState(world, cam, 320, 240, observer, robots, ball);
   const FieldDimensions dims = FieldDimensions::loadDefault();
-  const FrameTruth t = computeFrameTruth(s, FieldModel::fromDimensions(dims), dims, ScoringParams::loadDefault());
+  const FrameTruth t = computeFrameTruth(s, FieldMarkings::fromDimensions(dims), dims, ScoringParams::loadDefault());
   dump(dump_name, world.render(cam, 320, 240, false).gray, t);
   if (out_state) *out_state = s;
   return t;
@@ -196,7 +196,7 @@ void expectLinesAgree(const WorldState& s, const FrameTruth& t) {
   EXPECT_GT(double(on) / all, 0.95);
 
   const FieldDimensions dims;
-  const FieldModel model = FieldModel::fromDimensions(dims);
+  const FieldMarkings model = FieldMarkings::fromDimensions(dims);
   int checked = 0, off = 0;
   for (int y = 0; y < s.object_map.height; y += 2) {
     for (int x = 0; x < s.object_map.width; x += 2) {
