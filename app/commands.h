@@ -10,5 +10,6 @@ namespace colorfree::app {
 
 void addRenderCommand(CLI::App& app, int& exit_code);
 void addRunCommand(CLI::App& app, int& exit_code);
+void addDetectCommand(CLI::App& app, int& exit_code);
 
 }  // namespace colorfree::app

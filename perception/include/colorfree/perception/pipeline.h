@@ -1,0 +1,106 @@
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "colorfree/perception/camera_model.h"
+#include "colorfree/perception/field_lines.h"
+#include "colorfree/perception/high_contrast.h"
+#include "colorfree/perception/ignore_regions.h"
+#include "colorfree/perception/image.h"
+#include "colorfree/perception/percepts.h"
+
+namespace colorfree {
+
+/// The per-frame blackboard: the input and one member per stage output. A member that is empty
+/// was not produced (its stage is absent from the pipeline or has not run).
+struct Frame {
+  GrayView image;
+  CameraModel camera;
+
+  std::optional<FieldBoundary> field_boundary;
+  std::optional<BodyContour> body_contour;
+  std::optional<IgnoreMask> ignore_mask;
+  std::optional<ContrastRegions> contrast_regions;
+  std::optional<FieldLineResult> field_lines;
+  // Filled by later stages (robot and ball modules).
+  std::optional<std::vector<RobotProposal>> robot_proposals;
+  std::optional<std::vector<RobotPercept>> robot_percepts;
+  std::optional<std::vector<BallProposal>> ball_proposals;
+  std::optional<std::vector<BallPercept>> ball_percepts;
+
+  Frame(GrayView image_in, CameraModel camera_in)
+      : image(image_in), camera(std::move(camera_in)) {}
+};
+
+/// The pipeline's stages, in the order they run (the paper's profiling table rows).
+enum class Stage {
+  kIgnoreRegions,
+  kHighContrast,
+  kFieldLines,
+  kRobotProposals,
+  kRobotDetector,
+  kRobotOrientation,
+  kBallProposals,
+  kBallDetector,
+};
+inline constexpr int kStageCount = 8;
+const char* stageName(Stage stage);
+
+/// Timing of one stage over the frames processed so far.
+struct StageTiming {
+  long frames = 0;
+  double total_ms = 0;
+  double max_ms = 0;
+  double meanMs() const { return frames > 0 ? total_ms / frames : 0; }
+};
+
+/// Per-stage timing, kept by the caller and handed to `Pipeline::process` (no hidden state).
+/// A stage that never ran is absent (`timing` empty), not zero.
+class PipelineStats {
+ public:
+  void add(Stage stage, double ms);
+  const std::optional<StageTiming>& timing(Stage stage) const {
+    return timings_[static_cast<int>(stage)];
+  }
+  /// A table of mean and max per stage, "absent" for the stages that never ran.
+  std::string table() const;
+
+ private:
+  std::array<std::optional<StageTiming>, kStageCount> timings_;
+};
+
+/// Which stages run, and their parameters.
+struct PipelineConfig {
+  FieldBoundaryParams field_boundary;
+  BodyModelParams body_model;
+  HighContrastParams high_contrast;
+  FieldLineParams field_lines;
+  FieldDimensions field;
+  bool use_body_contour = true;  ///< the observer's body (bottom camera)
+  bool keep_rejected = false;    ///< keep rejected candidates with their reason
+
+  /// All parameters from the shipped files in perception/params.
+  static PipelineConfig loadDefault();
+  /// All parameters from the files in `dir` (same names as the shipped ones).
+  static PipelineConfig load(const std::string& dir);
+};
+
+/// Runs the stages on a Frame in a fixed order and times each.
+class Pipeline {
+ public:
+  explicit Pipeline(PipelineConfig config);
+  /// Throws colorfree::Error when the image does not match the camera model.
+  void process(Frame& frame, PipelineStats* stats = nullptr) const;
+
+ private:
+  PipelineConfig config_;
+  FieldBoundaryDetector field_boundary_;
+  BodyContourProvider body_contour_;
+  HighContrastDetector high_contrast_;
+  FieldLineDetector field_lines_;
+};
+
+}  // namespace colorfree

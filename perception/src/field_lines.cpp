@@ -1,0 +1,755 @@
+#include "colorfree/perception/field_lines.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/param_file.h"
+
+namespace colorfree {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+FieldLineParams FieldLineParams::load(const std::string& path) {
+  ParamFile f(path);
+  FieldLineParams p;
+  p.scan_spacing_px = static_cast<int>(f.getInRange("scan_spacing_px", 1, 64));
+  p.edge_step_px = static_cast<int>(f.getInRange("edge_step_px", 1, 8));
+  p.min_edge_contrast = f.getInRange("min_edge_contrast", 1, 255);
+  p.min_spot_contrast = f.getInRange("min_spot_contrast", 1, 255);
+  p.min_edge_balance = f.getInRange("min_edge_balance", 0, 1);
+  p.min_width_factor = f.getInRange("min_width_factor", 0, 10);
+  p.max_width_factor = f.getInRange("max_width_factor", 0.1, 20);
+  p.width_slack_px = f.getInRange("width_slack_px", 0, 50);
+  p.max_distance_m = f.getInRange("max_distance_m", 0.1, 20);
+  p.chain_max_slope = f.getInRange("chain_max_slope", 0.1, 10);
+  p.min_chain_spots = static_cast<int>(f.getInRange("min_chain_spots", 2, 100));
+  p.straight_tolerance_m = f.getInRange("straight_tolerance_m", 0, 1);
+  p.straight_tolerance_per_metre = f.getInRange("straight_tolerance_per_metre", 0, 1);
+  p.merge_max_angle_deg = f.getInRange("merge_max_angle_deg", 0, 45);
+  p.merge_max_offset_m = f.getInRange("merge_max_offset_m", 0, 1);
+  p.merge_max_gap_m = f.getInRange("merge_max_gap_m", 0, 10);
+  p.min_line_length_m = f.getInRange("min_line_length_m", 0, 10);
+  p.min_line_spots = static_cast<int>(f.getInRange("min_line_spots", 2, 1000));
+  p.extend_max_gap_m = f.getInRange("extend_max_gap_m", 0, 2);
+  p.width_trend_min_range = f.getInRange("width_trend_min_range", 1, 100);
+  p.min_width_trend = f.getInRange("min_width_trend", -10, 10);
+  p.circle_radius_tolerance_m = f.getInRange("circle_radius_tolerance_m", 0, 1);
+  p.circle_inlier_distance_m = f.getInRange("circle_inlier_distance_m", 0, 1);
+  p.circle_inlier_distance_per_metre = f.getInRange("circle_inlier_distance_per_metre", 0, 1);
+  p.min_circle_spots = static_cast<int>(f.getInRange("min_circle_spots", 3, 1000));
+  p.intersection_max_angle_deg = f.getInRange("intersection_max_angle_deg", 0, 45);
+  p.intersection_end_tolerance_m = f.getInRange("intersection_end_tolerance_m", 0, 2);
+  p.intersection_max_extension_m = f.getInRange("intersection_max_extension_m", 0, 2);
+  p.circle_line_max_offset_m = f.getInRange("circle_line_max_offset_m", 0, 2);
+  p.penalty_mark_max_extent_m = f.getInRange("penalty_mark_max_extent_m", 0.01, 2);
+  p.penalty_mark_clear_radius_m = f.getInRange("penalty_mark_clear_radius_m", 0, 5);
+  p.penalty_mark_max_distance_m = f.getInRange("penalty_mark_max_distance_m", 0, 20);
+  p.min_penalty_mark_spots = static_cast<int>(f.getInRange("min_penalty_mark_spots", 1, 100));
+  f.finish();
+  if (p.min_width_factor >= p.max_width_factor) {
+    throw Error(path + ": min_width_factor must be below max_width_factor");
+  }
+  return p;
+}
+
+FieldLineParams FieldLineParams::loadDefault() { return load(defaultParamDir() + "/field_lines.yaml"); }
+
+const char* lineRejectReasonName(LineRejectReason reason) {
+  switch (reason) {
+    case LineRejectReason::kTooShort: return "too short";
+    case LineRejectReason::kTooFewSpots: return "too few spots";
+    case LineRejectReason::kOnCircle: return "on the centre circle";
+    case LineRejectReason::kNotOnGround: return "not on the ground";
+  }
+  return "?";
+}
+
+FieldLineDetector::FieldLineDetector(FieldLineParams params, FieldDimensions field)
+    : params_(params), field_(field) {}
+
+namespace {
+
+// A bright run on one scan line, before projection.
+struct ScanSpot {
+  double along = 0;  // pixel coordinate along the scan (centre)
+  double width = 0;
+};
+
+// Finds bright runs between a rising and a falling edge on one scan line of `n` samples read by
+// `at(i)`; `expected(i)` is the width expected for a line centred at sample i (0: none).
+template <typename At, typename Expected>
+void scanLine(int begin, int end, const At& at, const Expected& expected, const FieldLineParams& p,
+              std::vector<ScanSpot>& out) {
+  const int step = p.edge_step_px;
+  const int thr = static_cast<int>(std::ceil(p.min_edge_contrast));
+  int i = begin + step;
+  double rise_pos = -1, rise_strength = 0;
+  while (i < end) {
+    const int d = at(i) - at(i - step);
+    if (d >= thr) {
+      // Strongest point of the rising edge.
+      int best = i, best_d = d;
+      while (i + 1 < end) {
+        const int dd = at(i + 1) - at(i + 1 - step);
+        if (dd < thr) break;
+        ++i;
+        if (dd > best_d) best_d = dd, best = i;
+      }
+      rise_pos = best - step / 2.0;
+      rise_strength = best_d;
+      ++i;
+      continue;
+    }
+    if (d <= -thr && rise_pos >= 0) {
+      int best = i, best_d = -d;
+      while (i + 1 < end) {
+        const int dd = at(i - step + 1) - at(i + 1);
+        if (dd < thr) break;
+        ++i;
+        if (dd > best_d) best_d = dd, best = i;
+      }
+      const double fall_pos = best - step / 2.0;
+      const double width = fall_pos - rise_pos;
+      const double centre = (rise_pos + fall_pos) / 2;
+      const double e = expected(static_cast<int>(centre));
+      const double lo_w = p.min_width_factor * e - p.width_slack_px;
+      const double hi_w = p.max_width_factor * e + p.width_slack_px;
+      const double balance = std::min<double>(rise_strength, best_d) / std::max<double>(rise_strength, best_d);
+      if (e > 0 && width >= lo_w && width <= hi_w && balance >= p.min_edge_balance) {
+        // The run must be brighter than the carpet on both sides, on average.
+        const int w = std::max(1, static_cast<int>(std::lround(width)));
+        const int r0 = static_cast<int>(std::ceil(rise_pos + 0.5));
+        const int r1 = static_cast<int>(std::floor(fall_pos - 0.5));
+        const int flank = std::max(2, w / 2);
+        const int b0 = static_cast<int>(std::floor(rise_pos)) - step / 2 - flank;
+        const int a1 = static_cast<int>(std::ceil(fall_pos)) + step / 2 + flank;
+        if (r1 >= r0 && b0 >= begin && a1 < end) {
+          double inner = 0, before = 0, after = 0;
+          for (int k = r0; k <= r1; ++k) inner += at(k);
+          inner /= (r1 - r0 + 1);
+          for (int k = b0; k < b0 + flank; ++k) before += at(k);
+          for (int k = a1 - flank + 1; k <= a1; ++k) after += at(k);
+          before /= flank;
+          after /= flank;
+          if (inner - std::max(before, after) >= p.min_spot_contrast) out.push_back({centre, width});
+        }
+      }
+      rise_pos = -1;
+      ++i;
+      continue;
+    }
+    ++i;
+  }
+}
+
+struct Fit {
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  Eigen::Vector2d direction = Eigen::Vector2d::UnitX();
+  double t_min = 0, t_max = 0;  // extent along the direction from the centroid
+  double max_residual = 0;
+  double length() const { return t_max - t_min; }
+  Eigen::Vector2d start() const { return centroid + t_min * direction; }
+  Eigen::Vector2d end() const { return centroid + t_max * direction; }
+};
+
+Fit fitLine(const std::vector<LineSpot>& spots, const std::vector<int>& ids) {
+  Fit f;
+  for (int i : ids) f.centroid += spots[i].position_in_robot;
+  f.centroid /= static_cast<double>(ids.size());
+  double sxx = 0, sxy = 0, syy = 0;
+  for (int i : ids) {
+    const Eigen::Vector2d d = spots[i].position_in_robot - f.centroid;
+    sxx += d.x() * d.x();
+    sxy += d.x() * d.y();
+    syy += d.y() * d.y();
+  }
+  const double angle = 0.5 * std::atan2(2 * sxy, sxx - syy);
+  f.direction = {std::cos(angle), std::sin(angle)};
+  const Eigen::Vector2d normal(-f.direction.y(), f.direction.x());
+  f.t_min = 1e300;
+  f.t_max = -1e300;
+  for (int i : ids) {
+    const Eigen::Vector2d d = spots[i].position_in_robot - f.centroid;
+    const double t = d.dot(f.direction);
+    f.t_min = std::min(f.t_min, t);
+    f.t_max = std::max(f.t_max, t);
+    f.max_residual = std::max(f.max_residual, std::abs(d.dot(normal)));
+  }
+  return f;
+}
+
+// Pixel extent, along a vertical or horizontal scan line, of a painted strip of `width_m` whose
+// centre line passes through `ground` in `direction` (robot frame); 0 when it cannot be seen.
+double widthAlongScan(const CameraModel& camera, const Eigen::Vector2d& ground,
+                      const Eigen::Vector2d& direction, double width_m, bool vertical_scan) {
+  const Eigen::Vector2d normal(-direction.y(), direction.x());
+  const Eigen::Vector2d b1 = ground + width_m / 2 * normal, b2 = ground - width_m / 2 * normal;
+  const auto p1 = camera.robotToPixel({b1.x(), b1.y(), 0});
+  const auto p2 = camera.robotToPixel({b2.x(), b2.y(), 0});
+  const Eigen::Vector2d along = b1 + 0.05 * direction;
+  const auto q1 = camera.robotToPixel({along.x(), along.y(), 0});
+  if (!p1 || !p2 || !q1 || (*q1 - *p1).norm() < 1e-9) return 0;
+  const Eigen::Vector2d d = (*q1 - *p1).normalized();
+  const Eigen::Vector2d image_normal(-d.y(), d.x());
+  const double across = std::abs((*p2 - *p1).dot(image_normal));
+  const double cosine = std::max(0.2, std::abs(vertical_scan ? image_normal.y() : image_normal.x()));
+  return across / cosine;
+}
+
+struct Piece {
+  std::vector<int> ids;
+  Fit fit;
+  bool alive = true;
+};
+
+// Kåsa's algebraic circle fit; false when degenerate.
+bool fitCircle(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d& centre, double& radius) {
+  if (pts.size() < 3) return false;
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) {
+    const Eigen::Vector3d row(p.x(), p.y(), 1);
+    const double z = p.squaredNorm();
+    a += row * row.transpose();
+    b += row * z;
+  }
+  const Eigen::Vector3d s = a.ldlt().solve(b);
+  if (!s.allFinite()) return false;
+  centre = {s(0) / 2, s(1) / 2};
+  const double r2 = s(2) + centre.squaredNorm();
+  if (r2 <= 0) return false;
+  radius = std::sqrt(r2);
+  return true;
+}
+
+}  // namespace
+
+FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel& camera,
+                                       const IgnoreMask& ignore, bool keep_rejected) const {
+  const int w = image.width;
+  const int h = image.height;
+  if (w != camera.width() || h != camera.height()) {
+    throw Error("field lines: image is " + std::to_string(w) + "x" + std::to_string(h) +
+                " but the camera model is " + std::to_string(camera.width()) + "x" +
+                std::to_string(camera.height()));
+  }
+  if (ignore.width != w || ignore.height != h) {
+    throw Error("field lines: ignore mask does not match the image size");
+  }
+  const FieldLineParams& p = params_;
+  const double lw = field_.line_width_m;
+  FieldLineResult out;
+
+  // Expected pixel widths of a line per row, measured at the image's middle column.
+  std::vector<double> expected_v(h, 0), expected_h(h, 0);
+  const Eigen::Vector3d cam = camera.position();
+  const double cx = w / 2.0;
+  for (int y = 0; y < h; ++y) {
+    const auto g = camera.pixelToGround({cx, y + 0.5});
+    if (!g) continue;
+    const Eigen::Vector2d away = (*g - cam.head<2>()).normalized();
+    if ((*g - cam.head<2>()).norm() > p.max_distance_m) continue;
+    const Eigen::Vector2d side(-away.y(), away.x());
+    const auto a = camera.robotToPixel({g->x() + lw * away.x(), g->y() + lw * away.y(), 0});
+    const auto b = camera.robotToPixel({g->x() + lw * side.x(), g->y() + lw * side.y(), 0});
+    if (a) expected_v[y] = std::abs(a->y() - (y + 0.5));
+    if (b) expected_h[y] = std::abs(b->x() - cx);
+  }
+
+  // Vertical scan lines: spots per scan line, kept in order of scan lines.
+  const int spacing = p.scan_spacing_px;
+  std::vector<ScanSpot> found;
+  std::vector<std::vector<int>> vertical_lines, horizontal_lines;
+  const auto addSpot = [&](const Eigen::Vector2d& px, double width, double expected, bool vertical) {
+    const auto g = camera.pixelToGround(px);
+    if (!g || (*g - cam.head<2>()).norm() > p.max_distance_m) return -1;
+    LineSpot s;
+    s.position_px = px;
+    s.position_in_robot = *g;
+    s.width_px = width;
+    s.expected_width_px = expected;
+    s.vertical_scan = vertical;
+    out.spots.push_back(s);
+    return static_cast<int>(out.spots.size()) - 1;
+  };
+  for (int x = spacing / 2; x < w; x += spacing) {
+    vertical_lines.emplace_back();
+    const int top = ignore.top_y[x];
+    const int bottom = ignore.bottom_y[x];
+    if (bottom - top < 3 * p.edge_step_px) continue;
+    found.clear();
+    const std::uint8_t* base = image.data + x;
+    const int stride = image.stride;
+    scanLine(
+        top, bottom, [&](int y) { return static_cast<int>(base[y * stride]); },
+        [&](int y) { return expected_v[std::clamp(y, 0, h - 1)]; }, p, found);
+    for (const ScanSpot& s : found) {
+      const int id = addSpot({x + 0.5, s.along + 0.5}, s.width,
+                             expected_v[std::clamp(static_cast<int>(s.along), 0, h - 1)], true);
+      if (id >= 0) vertical_lines.back().push_back(id);
+    }
+  }
+  for (int y = spacing / 2; y < h; y += spacing) {
+    horizontal_lines.emplace_back();
+    if (expected_h[y] <= 0) continue;
+    const std::uint8_t* row = image.row(y);
+    int x = 0;
+    while (x < w) {
+      while (x < w && !ignore.looked(x, y)) ++x;
+      const int begin = x;
+      while (x < w && ignore.looked(x, y)) ++x;
+      if (x - begin < 3 * p.edge_step_px) continue;
+      found.clear();
+      scanLine(
+          begin, x, [&](int i) { return static_cast<int>(row[i]); },
+          [&](int) { return expected_h[y]; }, p, found);
+      for (const ScanSpot& s : found) {
+        const int id = addSpot({s.along + 0.5, y + 0.5}, s.width, expected_h[y], false);
+        if (id >= 0) horizontal_lines.back().push_back(id);
+      }
+    }
+  }
+
+  // Chains of spots on neighbouring scan lines (one gap allowed), in the image.
+  std::vector<std::vector<int>> chains;
+  const auto chainScans = [&](const std::vector<std::vector<int>>& scans, bool vertical) {
+    struct Open {
+      int chain;
+      int last_scan;
+      double slope;  // pixels across per scan line, once two spots are in
+      bool has_slope;
+    };
+    std::vector<Open> open;
+    const auto across = [&](int id) {
+      return vertical ? out.spots[id].position_px.y() : out.spots[id].position_px.x();
+    };
+    for (int scan = 0; scan < static_cast<int>(scans.size()); ++scan) {
+      std::vector<char> taken(open.size(), 0);
+      std::vector<std::pair<int, int>> joins;  // (open index or -1, spot)
+      for (int id : scans[scan]) {
+        int best = -1;
+        double best_err = 1e300;
+        for (std::size_t k = 0; k < open.size(); ++k) {
+          if (taken[k]) continue;
+          const int last = chains[open[k].chain].back();
+          const int steps = scan - open[k].last_scan;
+          const double jump = across(id) - across(last);
+          if (std::abs(jump) > p.chain_max_slope * steps * spacing + out.spots[id].width_px / 2) continue;
+          const double err = std::abs(jump - (open[k].has_slope ? open[k].slope * steps : 0.0));
+          if (err < best_err) best_err = err, best = static_cast<int>(k);
+        }
+        if (best >= 0) taken[best] = 1;
+        joins.emplace_back(best, id);
+      }
+      for (const auto& [k, id] : joins) {
+        if (k >= 0) {
+          auto& chain = chains[open[k].chain];
+          open[k].slope = (across(id) - across(chain.back())) / (scan - open[k].last_scan);
+          open[k].has_slope = true;
+          chain.push_back(id);
+          open[k].last_scan = scan;
+        } else {
+          chains.push_back({id});
+          open.push_back({static_cast<int>(chains.size()) - 1, scan, 0.0, false});
+        }
+      }
+      open.erase(std::remove_if(open.begin(), open.end(),
+                                [&](const Open& o) { return scan - o.last_scan >= 2; }),
+                 open.end());
+    }
+  };
+  chainScans(vertical_lines, true);
+  chainScans(horizontal_lines, false);
+
+  // Straight pieces on the ground; a chain that bends (a corner, an arc) is split where it is
+  // farthest from its fitted line, until every piece is straight.
+  std::vector<Piece> pieces;
+  std::vector<char> in_chain(out.spots.size(), 0);
+  const auto tolerance = [&](const Fit& f) {
+    const double dist = (f.centroid - cam.head<2>()).norm();
+    return p.straight_tolerance_m + p.straight_tolerance_per_metre * dist;
+  };
+  std::vector<std::vector<int>> long_chains;
+  std::vector<std::vector<int>> todo;
+  for (const auto& chain : chains) {
+    if (static_cast<int>(chain.size()) < p.min_chain_spots) continue;
+    for (int id : chain) in_chain[id] = 1;
+    long_chains.push_back(chain);
+    todo.push_back(chain);
+  }
+  while (!todo.empty()) {
+    std::vector<int> ids = std::move(todo.back());
+    todo.pop_back();
+    Piece piece;
+    piece.fit = fitLine(out.spots, ids);
+    const double tol = tolerance(piece.fit);
+    if (piece.fit.max_residual <= tol) {
+      piece.ids = std::move(ids);
+      pieces.push_back(std::move(piece));
+      continue;
+    }
+    const Eigen::Vector2d normal(-piece.fit.direction.y(), piece.fit.direction.x());
+    std::size_t worst = 0;
+    double worst_residual = -1;
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      const double r = std::abs((out.spots[ids[i]].position_in_robot - piece.fit.centroid).dot(normal));
+      if (r > worst_residual) worst_residual = r, worst = i;
+    }
+    worst = std::clamp<std::size_t>(worst, 1, ids.size() - 1);
+    std::vector<int> first(ids.begin(), ids.begin() + static_cast<long>(worst));
+    std::vector<int> second(ids.begin() + static_cast<long>(worst), ids.end());
+    if (static_cast<int>(first.size()) >= p.min_chain_spots) todo.push_back(std::move(first));
+    if (static_cast<int>(second.size()) >= p.min_chain_spots) todo.push_back(std::move(second));
+  }
+
+  // Centre circle: every chained spot votes for the two centres a radius away along its normal.
+  const double radius = field_.centre_circle_diameter_m / 2;
+  std::vector<char> on_circle(out.spots.size(), 0);
+  {
+    constexpr double kCell = 0.1;
+    std::map<std::pair<int, int>, int> votes;
+    for (const auto& c : long_chains) {
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const std::size_t a = i > 0 ? i - 1 : i;
+        const std::size_t b = i + 1 < c.size() ? i + 1 : i;
+        const Eigen::Vector2d t = out.spots[c[b]].position_in_robot - out.spots[c[a]].position_in_robot;
+        if (t.norm() < 1e-6) continue;
+        const Eigen::Vector2d n = Eigen::Vector2d(-t.y(), t.x()).normalized();
+        for (double sgn : {-1.0, 1.0}) {
+          const Eigen::Vector2d centre = out.spots[c[i]].position_in_robot + sgn * radius * n;
+          ++votes[{static_cast<int>(std::floor(centre.x() / kCell)),
+                   static_cast<int>(std::floor(centre.y() / kCell))}];
+        }
+      }
+    }
+    int best_votes = 0;
+    std::pair<int, int> best_cell{0, 0};
+    for (const auto& [cell, count] : votes) {
+      int sum = 0;
+      for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          const auto it = votes.find({cell.first + dx, cell.second + dy});
+          if (it != votes.end()) sum += it->second;
+        }
+      }
+      if (sum > best_votes) best_votes = sum, best_cell = cell;
+    }
+    if (best_votes >= p.min_circle_spots) {
+      Eigen::Vector2d centre((best_cell.first + 0.5) * kCell, (best_cell.second + 0.5) * kCell);
+      bool ok = false;
+      // Spots farther away are placed less precisely on the ground.
+      const auto inlierDistance = [&](int id) {
+        return p.circle_inlier_distance_m +
+               p.circle_inlier_distance_per_metre * (out.spots[id].position_in_robot - cam.head<2>()).norm();
+      };
+      std::vector<int> inliers;
+      // Refit a few times on the chains that lie (mostly) on the current circle: a straight line
+      // touches a circle only along a short stretch, so its chain is mostly off it.
+      for (int iteration = 0; iteration < 3; ++iteration) {
+        inliers.clear();
+        std::vector<Eigen::Vector2d> pts;
+        const double scale = iteration == 0 ? 1.5 : 1.0;
+        for (const auto& chain : long_chains) {
+          std::size_t first = inliers.size();
+          for (int id : chain) {
+            const double d = (out.spots[id].position_in_robot - centre).norm();
+            if (std::abs(d - radius) <= scale * inlierDistance(id)) inliers.push_back(id);
+          }
+          if ((inliers.size() - first) * 10 < chain.size() * 7) {
+            inliers.resize(first);
+            continue;
+          }
+          for (std::size_t i = first; i < inliers.size(); ++i) pts.push_back(out.spots[inliers[i]].position_in_robot);
+        }
+        Eigen::Vector2d c;
+        double r;
+        ok = static_cast<int>(pts.size()) >= p.min_circle_spots && fitCircle(pts, c, r) &&
+             std::abs(r - radius) <= p.circle_radius_tolerance_m;
+        if (!ok) break;
+        centre = c;
+      }
+      if (ok) {
+        // The points must go round the centre: a straight line touches it only in a narrow arc.
+        std::vector<double> angles;
+        for (int id : inliers) {
+          const Eigen::Vector2d d = out.spots[id].position_in_robot - centre;
+          angles.push_back(std::atan2(d.y(), d.x()));
+        }
+        std::sort(angles.begin(), angles.end());
+        double largest_gap = angles.front() + 2 * kPi - angles.back();
+        for (std::size_t i = 1; i < angles.size(); ++i) largest_gap = std::max(largest_gap, angles[i] - angles[i - 1]);
+        const double span = 2 * kPi - largest_gap;
+        if (span >= kPi / 2.5) {
+          CircleMarkPercept circle;
+          circle.centre_in_robot = centre;
+          if (const auto px = camera.robotToPixel({centre.x(), centre.y(), 0})) circle.centre_px = *px;
+          out.features.centre_circle = circle;
+          for (int id : inliers) out.circle_points_in_robot.push_back(out.spots[id].position_in_robot);
+          for (int id = 0; id < static_cast<int>(out.spots.size()); ++id) {
+            const double d = (out.spots[id].position_in_robot - centre).norm();
+            if (in_chain[id] && std::abs(d - radius) <= inlierDistance(id)) on_circle[id] = 1;
+          }
+        }
+      }
+    }
+  }
+
+  // Pieces mostly on the circle are its arcs, not lines.
+  std::vector<RejectedLine> rejected;
+  const auto toPercept = [&](const Fit& f) {
+    LinePercept l;
+    l.start_in_robot = f.start();
+    l.end_in_robot = f.end();
+    if (const auto a = camera.robotToPixel({l.start_in_robot.x(), l.start_in_robot.y(), 0})) l.start_px = *a;
+    if (const auto b = camera.robotToPixel({l.end_in_robot.x(), l.end_in_robot.y(), 0})) l.end_px = *b;
+    return l;
+  };
+  if (out.features.centre_circle) {
+    for (auto& pc : pieces) {
+      int n = 0;
+      for (int id : pc.ids) n += on_circle[id];
+      if (n * 10 >= static_cast<int>(pc.ids.size()) * 7) {
+        pc.alive = false;
+        if (keep_rejected) rejected.push_back({toPercept(pc.fit), LineRejectReason::kOnCircle});
+      }
+    }
+  }
+
+  // Merge collinear pieces, longest first.
+  std::sort(pieces.begin(), pieces.end(),
+            [](const Piece& a, const Piece& b) { return a.fit.length() > b.fit.length(); });
+  const double max_cos = std::cos(p.merge_max_angle_deg * kPi / 180);
+  bool merged_any = true;
+  while (merged_any) {
+    merged_any = false;
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      if (!pieces[i].alive) continue;
+      for (std::size_t j = i + 1; j < pieces.size(); ++j) {
+        if (!pieces[j].alive) continue;
+        const Fit& a = pieces[i].fit;
+        const Fit& b = pieces[j].fit;
+        if (std::abs(a.direction.dot(b.direction)) < max_cos) continue;
+        const Eigen::Vector2d normal(-a.direction.y(), a.direction.x());
+        if (std::abs((b.start() - a.centroid).dot(normal)) > p.merge_max_offset_m ||
+            std::abs((b.end() - a.centroid).dot(normal)) > p.merge_max_offset_m) {
+          continue;
+        }
+        const double s0 = (b.start() - a.centroid).dot(a.direction);
+        const double s1 = (b.end() - a.centroid).dot(a.direction);
+        const double gap = std::max(std::min(s0, s1) - a.t_max, a.t_min - std::max(s0, s1));
+        if (gap > p.merge_max_gap_m) continue;
+        std::vector<int> ids = pieces[i].ids;
+        ids.insert(ids.end(), pieces[j].ids.begin(), pieces[j].ids.end());
+        const Fit f = fitLine(out.spots, ids);
+        if (f.max_residual > tolerance(f) + p.merge_max_offset_m / 2) continue;
+        pieces[i].ids = std::move(ids);
+        pieces[i].fit = f;
+        pieces[j].alive = false;
+        merged_any = true;
+      }
+    }
+  }
+
+  // Spots lost when a chain was split at a corner, or on short pieces, join the line they lie on
+  // (a spot at a corner may serve both lines).
+  for (auto& pc : pieces) {
+    if (!pc.alive) continue;
+    const Fit& f = pc.fit;
+    const Eigen::Vector2d normal(-f.direction.y(), f.direction.x());
+    const double tol = tolerance(f);
+    std::vector<char> own(out.spots.size(), 0);
+    for (int id : pc.ids) own[id] = 1;
+    std::vector<int> ids = pc.ids;
+    for (int id = 0; id < static_cast<int>(out.spots.size()); ++id) {
+      if (own[id] || on_circle[id]) continue;
+      const Eigen::Vector2d d = out.spots[id].position_in_robot - f.centroid;
+      const double t = d.dot(f.direction);
+      if (std::abs(d.dot(normal)) <= tol && t >= f.t_min - p.extend_max_gap_m && t <= f.t_max + p.extend_max_gap_m) {
+        ids.push_back(id);
+      }
+    }
+    if (ids.size() == pc.ids.size()) continue;
+    const Fit grown = fitLine(out.spots, ids);
+    if (grown.max_residual <= tolerance(grown)) {
+      pc.ids = std::move(ids);
+      pc.fit = grown;
+    }
+  }
+
+  std::vector<char> on_line(out.spots.size(), 0);
+  for (const auto& pc : pieces) {
+    if (!pc.alive) continue;
+    std::optional<LineRejectReason> reason;
+    if (pc.fit.length() < p.min_line_length_m) {
+      reason = LineRejectReason::kTooShort;
+    } else if (static_cast<int>(pc.ids.size()) < p.min_line_spots) {
+      reason = LineRejectReason::kTooFewSpots;
+    } else {
+      // Widths of a painted line grow with the width it would have at each spot (given the line's
+      // direction on the ground); those of an upright part (a robot's leg) do not.
+      std::vector<double> expected;
+      expected.reserve(pc.ids.size());
+      double e_min = 1e300, e_max = 0;
+      for (int id : pc.ids) {
+        const double e = widthAlongScan(camera, out.spots[id].position_in_robot, pc.fit.direction, lw,
+                                        out.spots[id].vertical_scan);
+        expected.push_back(e);
+        if (e > 0) e_min = std::min(e_min, e), e_max = std::max(e_max, e);
+      }
+      if (e_max > 0 && e_max / e_min >= p.width_trend_min_range) {
+        double mx = 0, my = 0, n = 0;
+        for (std::size_t i = 0; i < pc.ids.size(); ++i) {
+          if (expected[i] <= 0) continue;
+          mx += std::log(expected[i]);
+          my += std::log(std::max(1.0, out.spots[pc.ids[i]].width_px));
+          ++n;
+        }
+        mx /= n;
+        my /= n;
+        double sxy = 0, sxx = 0;
+        for (std::size_t i = 0; i < pc.ids.size(); ++i) {
+          if (expected[i] <= 0) continue;
+          const double dx = std::log(expected[i]) - mx;
+          sxy += dx * (std::log(std::max(1.0, out.spots[pc.ids[i]].width_px)) - my);
+          sxx += dx * dx;
+        }
+        if (sxx > 0 && sxy / sxx < p.min_width_trend) reason = LineRejectReason::kNotOnGround;
+      }
+    }
+    if (reason) {
+      if (keep_rejected) rejected.push_back({toPercept(pc.fit), *reason});
+      continue;
+    }
+    for (int id : pc.ids) on_line[id] = 1;
+    out.features.lines.push_back(toPercept(pc.fit));
+  }
+  if (keep_rejected) out.rejected = std::move(rejected);
+
+  // Intersections of lines that meet at about a right angle.
+  const double max_dot = std::sin(p.intersection_max_angle_deg * kPi / 180);
+  const auto& lines = out.features.lines;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    for (std::size_t j = i + 1; j < lines.size(); ++j) {
+      const Eigen::Vector2d a0 = lines[i].start_in_robot, b0 = lines[j].start_in_robot;
+      const Eigen::Vector2d da = lines[i].end_in_robot - a0, db = lines[j].end_in_robot - b0;
+      const double la = da.norm(), lb = db.norm();
+      const Eigen::Vector2d ua = da / la, ub = db / lb;
+      if (std::abs(ua.dot(ub)) > max_dot) continue;
+      const double det = ua.x() * (-ub.y()) - ua.y() * (-ub.x());
+      if (std::abs(det) < 1e-9) continue;
+      const Eigen::Vector2d r = b0 - a0;
+      const double ta = (r.x() * (-ub.y()) - r.y() * (-ub.x())) / det;
+      const double tb = (ua.x() * r.y() - ua.y() * r.x()) / det;
+      const double ext = p.intersection_max_extension_m;
+      if (ta < -ext || ta > la + ext || tb < -ext || tb > lb + ext) continue;
+      const double tol = p.intersection_end_tolerance_m;
+      const bool a_end = ta < tol || ta > la - tol;
+      const bool b_end = tb < tol || tb > lb - tol;
+      IntersectionPercept x;
+      x.position_in_robot = a0 + ta * ua;
+      if (const auto px = camera.robotToPixel({x.position_in_robot.x(), x.position_in_robot.y(), 0})) {
+        x.position_px = *px;
+      }
+      const Eigen::Vector2d away_a = ta < la / 2 ? ua : Eigen::Vector2d(-ua);
+      const Eigen::Vector2d away_b = tb < lb / 2 ? ub : Eigen::Vector2d(-ub);
+      if (a_end && b_end) {
+        x.type = IntersectionType::kL;
+        x.direction1_in_robot = away_a;
+        x.direction2_in_robot = away_b;
+      } else if (a_end) {
+        x.type = IntersectionType::kT;
+        x.direction1_in_robot = away_a;
+        x.direction2_in_robot = ub;
+      } else if (b_end) {
+        x.type = IntersectionType::kT;
+        x.direction1_in_robot = away_b;
+        x.direction2_in_robot = ua;
+      } else {
+        x.type = IntersectionType::kX;
+        x.direction1_in_robot = ua;
+        x.direction2_in_robot = ub;
+      }
+      out.features.intersections.push_back(x);
+    }
+  }
+
+  // The halfway line crosses the centre circle in two X intersections.
+  if (out.features.centre_circle) {
+    const Eigen::Vector2d centre = out.features.centre_circle->centre_in_robot;
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      const Eigen::Vector2d a0 = lines[i].start_in_robot;
+      const Eigen::Vector2d d = lines[i].end_in_robot - a0;
+      const double len = d.norm();
+      const Eigen::Vector2d u = d / len;
+      const Eigen::Vector2d normal(-u.y(), u.x());
+      if (std::abs((centre - a0).dot(normal)) > p.circle_line_max_offset_m) continue;
+      const double tc = (centre - a0).dot(u);
+      for (double t : {tc - radius, tc + radius}) {
+        if (t < -p.intersection_max_extension_m || t > len + p.intersection_max_extension_m) continue;
+        IntersectionPercept x;
+        x.type = IntersectionType::kX;
+        x.position_in_robot = a0 + t * u;
+        if (const auto px = camera.robotToPixel({x.position_in_robot.x(), x.position_in_robot.y(), 0})) {
+          x.position_px = *px;
+        }
+        x.direction1_in_robot = u;
+        x.direction2_in_robot = normal;
+        out.features.intersections.push_back(x);
+      }
+    }
+  }
+
+  // Penalty marks: a small cluster of spots not on a line or the circle, alone on the carpet.
+  std::vector<int> loose;
+  for (int id = 0; id < static_cast<int>(out.spots.size()); ++id) {
+    if (!on_line[id] && !on_circle[id]) loose.push_back(id);
+  }
+  std::vector<char> used(out.spots.size(), 0);
+  for (int seed : loose) {
+    if (used[seed]) continue;
+    std::vector<int> cluster;
+    for (int id : loose) {
+      if (!used[id] && (out.spots[id].position_in_robot - out.spots[seed].position_in_robot).norm() <=
+                           p.penalty_mark_max_extent_m) {
+        cluster.push_back(id);
+      }
+    }
+    if (static_cast<int>(cluster.size()) < p.min_penalty_mark_spots) continue;
+    // A cross is crossed by both vertical and horizontal scan lines.
+    bool vertical = false, horizontal = false;
+    for (int id : cluster) (out.spots[id].vertical_scan ? vertical : horizontal) = true;
+    if (!vertical || !horizontal) {
+      for (int id : cluster) used[id] = 1;
+      continue;
+    }
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    for (int id : cluster) centre += out.spots[id].position_in_robot;
+    centre /= static_cast<double>(cluster.size());
+    double extent = 0;
+    for (int a : cluster) {
+      for (int b : cluster) {
+        extent = std::max(extent, (out.spots[a].position_in_robot - out.spots[b].position_in_robot).norm());
+      }
+    }
+    bool clear = extent <= p.penalty_mark_max_extent_m &&
+                 (centre - cam.head<2>()).norm() <= p.penalty_mark_max_distance_m;
+    for (int id = 0; clear && id < static_cast<int>(out.spots.size()); ++id) {
+      if (std::find(cluster.begin(), cluster.end(), id) != cluster.end()) continue;
+      if ((out.spots[id].position_in_robot - centre).norm() < p.penalty_mark_clear_radius_m) clear = false;
+    }
+    for (int id : cluster) used[id] = 1;
+    if (!clear) continue;
+    CircleMarkPercept mark;
+    mark.centre_in_robot = centre;
+    if (const auto px = camera.robotToPixel({centre.x(), centre.y(), 0})) mark.centre_px = *px;
+    out.features.penalty_marks.push_back(mark);
+  }
+  return out;
+}
+
+}  // namespace colorfree

@@ -1,0 +1,179 @@
+#include "colorfree/perception/high_contrast.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/param_file.h"
+
+namespace colorfree {
+
+HighContrastParams HighContrastParams::load(const std::string& path) {
+  ParamFile f(path);
+  HighContrastParams p;
+  p.window_px = static_cast<int>(f.getInRange("window_px", 4, 64));
+  p.min_contrast = f.getInRange("min_contrast", 0, 128);
+  p.dilation_windows = static_cast<int>(f.getInRange("dilation_windows", 0, 8));
+  f.finish();
+  return p;
+}
+
+HighContrastParams HighContrastParams::loadDefault() {
+  return load(defaultParamDir() + "/high_contrast.yaml");
+}
+
+int ContrastRegions::markedCount() const {
+  return static_cast<int>(std::count(mask.begin(), mask.end(), std::uint8_t{1}));
+}
+
+OtsuResult otsu(const std::uint32_t* hist) {
+  OtsuResult best;
+  int lo = 0;
+  while (lo < 256 && hist[lo] == 0) ++lo;
+  int hi = 255;
+  while (hi >= 0 && hist[hi] == 0) --hi;
+  if (lo >= hi) {
+    best.threshold = std::max(lo, 0);
+    best.mean0 = best.mean1 = std::max(lo, 0);
+    return best;
+  }
+  double total = 0, total_sum = 0;
+  for (int v = lo; v <= hi; ++v) {
+    total += hist[v];
+    total_sum += static_cast<double>(v) * hist[v];
+  }
+  double n0 = 0, sum0 = 0, best_score = -1;
+  for (int t = lo; t < hi; ++t) {
+    n0 += hist[t];
+    sum0 += static_cast<double>(t) * hist[t];
+    const double n1 = total - n0;
+    if (n0 == 0 || n1 == 0) continue;
+    const double m0 = sum0 / n0;
+    const double m1 = (total_sum - sum0) / n1;
+    // Between-class variance w0 w1 (m1 − m0)², up to the constant 1 / total².
+    const double score = n0 * n1 * (m1 - m0) * (m1 - m0);
+    if (score > best_score) {
+      best_score = score;
+      best.threshold = t;
+      best.mean0 = m0;
+      best.mean1 = m1;
+    }
+  }
+  best.between_std = std::sqrt(best_score) / total;
+  return best;
+}
+
+HighContrastDetector::HighContrastDetector(HighContrastParams params) : params_(params) {}
+
+ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMask& ignore) const {
+  if (ignore.width != image.width || ignore.height != image.height) {
+    throw Error("high-contrast regions: ignore mask does not match the image size");
+  }
+  const int s = params_.window_px;
+  ContrastRegions out;
+  out.window_px = s;
+  out.columns = image.width / s;
+  out.rows = image.height / s;
+  const std::size_t n = static_cast<std::size_t>(out.columns) * out.rows;
+  out.seeds.assign(n, 0);
+  out.mask.assign(n, 0);
+  out.contrast.assign(n, 0.f);
+  const int used_width = out.columns * s;
+  const double min_var = params_.min_contrast * params_.min_contrast;
+  const double count = static_cast<double>(s) * s;
+
+  std::vector<std::uint32_t> col_sum(used_width), col_sq(used_width);
+  std::vector<std::uint8_t> looked(out.columns);
+  for (int r = 0; r < out.rows; ++r) {
+    const int cy = r * s + s / 2;
+    bool any = false;
+    for (int c = 0; c < out.columns; ++c) {
+      looked[c] = ignore.looked(c * s + s / 2, cy) ? 1 : 0;
+      any = any || looked[c];
+    }
+    if (!any) continue;
+    // Column sums over the window row, vectorised along x; windows then add up their columns.
+    std::fill(col_sum.begin(), col_sum.end(), 0u);
+    std::fill(col_sq.begin(), col_sq.end(), 0u);
+    for (int y = r * s; y < (r + 1) * s; ++y) {
+      const std::uint8_t* row = image.row(y);
+      std::uint32_t* sum = col_sum.data();
+      std::uint32_t* sq = col_sq.data();
+      for (int x = 0; x < used_width; ++x) {
+        const std::uint32_t v = row[x];
+        sum[x] += v;
+        sq[x] += v * v;
+      }
+    }
+    for (int c = 0; c < out.columns; ++c) {
+      if (!looked[c]) continue;
+      std::uint32_t sum = 0, sq = 0;
+      for (int x = c * s; x < (c + 1) * s; ++x) {
+        sum += col_sum[x];
+        sq += col_sq[x];
+      }
+      const double mean = sum / count;
+      const double var = sq / count - mean * mean;
+      // Otsu's between-class variance never exceeds the window's variance.
+      if (var < min_var) continue;
+      std::uint32_t hist[256] = {};
+      for (int y = r * s; y < (r + 1) * s; ++y) {
+        const std::uint8_t* row = image.row(y) + c * s;
+        for (int x = 0; x < s; ++x) ++hist[row[x]];
+      }
+      const OtsuResult o = otsu(hist);
+      const std::size_t i = static_cast<std::size_t>(r) * out.columns + c;
+      out.contrast[i] = static_cast<float>(o.between_std);
+      if (o.between_std >= params_.min_contrast) out.seeds[i] = 1;
+    }
+  }
+
+  const int d = params_.dilation_windows;
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.columns; ++c) {
+      if (!out.seeds[static_cast<std::size_t>(r) * out.columns + c]) continue;
+      for (int rr = std::max(0, r - d); rr <= std::min(out.rows - 1, r + d); ++rr) {
+        for (int cc = std::max(0, c - d); cc <= std::min(out.columns - 1, c + d); ++cc) {
+          out.mask[static_cast<std::size_t>(rr) * out.columns + cc] = 1;
+        }
+      }
+    }
+  }
+
+  // Connected regions (8-neighbourhood) of the marked windows.
+  std::vector<int> label(n, -1);
+  std::vector<int> stack;
+  for (std::size_t start = 0; start < n; ++start) {
+    if (!out.mask[start] || label[start] >= 0) continue;
+    const int id = static_cast<int>(out.regions.size());
+    ContrastRegion region;
+    int c0 = out.columns, c1 = -1, r0 = out.rows, r1 = -1;
+    stack.assign(1, static_cast<int>(start));
+    label[start] = id;
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      const int r = i / out.columns, c = i % out.columns;
+      ++region.window_count;
+      c0 = std::min(c0, c);
+      c1 = std::max(c1, c);
+      r0 = std::min(r0, r);
+      r1 = std::max(r1, r);
+      for (int rr = std::max(0, r - 1); rr <= std::min(out.rows - 1, r + 1); ++rr) {
+        for (int cc = std::max(0, c - 1); cc <= std::min(out.columns - 1, c + 1); ++cc) {
+          const int j = rr * out.columns + cc;
+          if (out.mask[j] && label[j] < 0) {
+            label[j] = id;
+            stack.push_back(j);
+          }
+        }
+      }
+    }
+    region.box = {static_cast<double>(c0 * s), static_cast<double>(r0 * s),
+                  static_cast<double>((c1 + 1) * s), static_cast<double>((r1 + 1) * s)};
+    out.regions.push_back(region);
+  }
+  return out;
+}
+
+}  // namespace colorfree

@@ -1,0 +1,111 @@
+#include "colorfree/perception/pipeline.h"
+
+#include <chrono>
+#include <cstdio>
+
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/param_file.h"
+
+namespace colorfree {
+
+const char* stageName(Stage stage) {
+  switch (stage) {
+    case Stage::kIgnoreRegions: return "ignore regions (field boundary, own body)";
+    case Stage::kHighContrast: return "high contrast regions";
+    case Stage::kFieldLines: return "field lines and features";
+    case Stage::kRobotProposals: return "robot proposals";
+    case Stage::kRobotDetector: return "robot detector";
+    case Stage::kRobotOrientation: return "robot orientation";
+    case Stage::kBallProposals: return "ball proposals";
+    case Stage::kBallDetector: return "ball detector";
+  }
+  return "?";
+}
+
+void PipelineStats::add(Stage stage, double ms) {
+  auto& t = timings_[static_cast<int>(stage)];
+  if (!t) t = StageTiming{};
+  ++t->frames;
+  t->total_ms += ms;
+  t->max_ms = std::max(t->max_ms, ms);
+}
+
+std::string PipelineStats::table() const {
+  std::string out = "stage                                       mean ms    max ms  frames\n";
+  char line[160];
+  for (int i = 0; i < kStageCount; ++i) {
+    const auto& t = timings_[i];
+    if (t) {
+      std::snprintf(line, sizeof line, "%-42s %9.4f %9.4f %7ld\n", stageName(static_cast<Stage>(i)),
+                    t->meanMs(), t->max_ms, t->frames);
+    } else {
+      std::snprintf(line, sizeof line, "%-42s    absent\n", stageName(static_cast<Stage>(i)));
+    }
+    out += line;
+  }
+  return out;
+}
+
+PipelineConfig PipelineConfig::load(const std::string& dir) {
+  PipelineConfig c;
+  c.field_boundary = FieldBoundaryParams::load(dir + "/field_boundary.yaml");
+  c.body_model = BodyModelParams::load(dir + "/body_model.yaml");
+  c.high_contrast = HighContrastParams::load(dir + "/high_contrast.yaml");
+  c.field_lines = FieldLineParams::load(dir + "/field_lines.yaml");
+  c.field = FieldDimensions::load(dir + "/field_dimensions.yaml");
+  return c;
+}
+
+PipelineConfig PipelineConfig::loadDefault() { return load(defaultParamDir()); }
+
+Pipeline::Pipeline(PipelineConfig config)
+    : config_(config),
+      field_boundary_(config.field_boundary),
+      body_contour_(config.body_model),
+      high_contrast_(config.high_contrast),
+      field_lines_(config.field_lines, config.field) {}
+
+namespace {
+
+// Runs `f` and adds its duration to the stage's timing.
+template <typename F>
+void timed(PipelineStats* stats, Stage stage, F&& f) {
+  const auto start = std::chrono::steady_clock::now();
+  f();
+  const auto end = std::chrono::steady_clock::now();
+  if (stats) stats->add(stage, std::chrono::duration<double, std::milli>(end - start).count());
+}
+
+}  // namespace
+
+void Pipeline::process(Frame& frame, PipelineStats* stats) const {
+  const GrayView& image = frame.image;
+  if (image.empty()) throw Error("pipeline: empty image");
+  if (image.width != frame.camera.width() || image.height != frame.camera.height()) {
+    throw Error("pipeline: image is " + std::to_string(image.width) + "x" +
+                std::to_string(image.height) + " but the camera model is " +
+                std::to_string(frame.camera.width()) + "x" + std::to_string(frame.camera.height()));
+  }
+  if (image.stride < image.width) throw Error("pipeline: image stride is smaller than its width");
+
+  // The order of the stages, as in the paper's framework.
+  timed(stats, Stage::kIgnoreRegions, [&] {
+    frame.field_boundary = field_boundary_.run(image, frame.camera);
+    if (config_.use_body_contour) {
+      frame.body_contour = body_contour_.run(frame.camera);
+    } else {
+      BodyContour none;
+      none.top_y.assign(image.width, image.height);
+      frame.body_contour = std::move(none);
+    }
+    frame.ignore_mask =
+        IgnoreMask::combine(*frame.field_boundary, *frame.body_contour, image.width, image.height);
+  });
+  timed(stats, Stage::kHighContrast,
+        [&] { frame.contrast_regions = high_contrast_.run(image, *frame.ignore_mask); });
+  timed(stats, Stage::kFieldLines, [&] {
+    frame.field_lines = field_lines_.run(image, frame.camera, *frame.ignore_mask, config_.keep_rejected);
+  });
+}
+
+}  // namespace colorfree
