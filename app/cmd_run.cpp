@@ -1,5 +1,6 @@
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -101,7 +102,9 @@ void addRunCommand(CLI::App& app, int& exit_code) {
     if (args->frames < 0) throw Error("--frames must be positive");
     ScoringParams params =
         args->scoring.empty() ? ScoringParams::loadDefault() : ScoringParams::load(args->scoring);
-    params.orientation_tolerance_deg = scenario.cases.front().settings.orientation_tolerance_rad * kRadToDeg;
+    // Rounded to a milli-degree: the scenario keeps 22.5° as 0.3927 rad (22.50005°).
+    params.orientation_tolerance_deg =
+        std::round(scenario.cases.front().settings.orientation_tolerance_rad * kRadToDeg * 1e3) / 1e3;
 
     namespace fs = std::filesystem;
     fs::create_directories(args->out);
@@ -144,7 +147,11 @@ void addRunCommand(CLI::App& app, int& exit_code) {
       const std::string frame_dir = args->out + "/frames/" + caseFolder(c);
       if (args->save_frames) fs::create_directories(frame_dir);
       runner.runCase(c, args->frames > 0 ? args->frames : -1, true, [&](const sim::RenderedFrame& f) {
-        const FramePercepts percepts = perception.process(f.image, f.truth.camera.model);
+        FieldPose guess = f.truth.observer;
+        guess.x_m += params.pose_guess_offset_m / std::sqrt(2.0);
+        guess.y_m += params.pose_guess_offset_m / std::sqrt(2.0);
+        guess.heading_rad += params.pose_guess_offset_deg / kRadToDeg;
+        const FramePercepts percepts = perception.process(f.image, f.truth.camera.model, guess);
         scorer.addFrame(f.truth, percepts, &f.image);
         if (args->save_frames) writeGrayPng(frame_dir + "/" + frameFile(f.frame_index), f.image.view());
         bar.update(++done, total, info.name);

@@ -264,11 +264,17 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
       {"ball_detector", {"Ball detector", {2.452, 6.959}}}};
   h << "<h2>Profiling (paper's Table 3; ours on this machine, paper's on a NAO V5)</h2><table><tr><th>module</th>"
        "<th>avg. ms, ours</th><th>max. ms, ours</th><th class=paper>avg. ms, paper</th><th class=paper>max. ms, paper</th></tr>";
+  // The paper's rows in its order, then any other stage the pipeline timed.
+  std::vector<std::string> stage_order = paperStageNames();
   for (auto it = at(r, "timing_ms").begin(); it != at(r, "timing_ms").end(); ++it) {
-    const auto p = kPaperStages.find(it.key());
-    const bool present = it.value()["mean"].is_number();
-    h << "<tr><td>" << (p != kPaperStages.end() ? p->second.first + " (<code>" + it.key() + "</code>)" : "<code>" + esc(it.key()) + "</code>")
-      << "</td><td>" << cell(it.value()["mean"], present, 3) << "</td><td>" << cell(it.value()["max"], present, 3)
+    if (std::find(stage_order.begin(), stage_order.end(), it.key()) == stage_order.end()) stage_order.push_back(it.key());
+  }
+  for (const auto& key : stage_order) {
+    const json& t = at(r, "timing_ms")[key];
+    const auto p = kPaperStages.find(key);
+    const bool present = t.is_object() && t["mean"].is_number();
+    h << "<tr><td>" << (p != kPaperStages.end() ? p->second.first + " (<code>" + key + "</code>)" : "<code>" + esc(key) + "</code>")
+      << "</td><td>" << cell(present ? t["mean"] : json(), present, 3) << "</td><td>" << cell(present ? t["max"] : json(), present, 3)
       << "</td><td class=paper>" << (p != kPaperStages.end() ? num(p->second.second.first, 3) : "&ndash;")
       << "</td><td class=paper>" << (p != kPaperStages.end() ? num(p->second.second.second, 3) : "&ndash;") << "</td></tr>";
   }

@@ -182,6 +182,8 @@ json paramsJson(const ScoringParams& p) {
           {"line_match_max_px", p.line_match_max_px},
           {"intersection_match_max_px", p.intersection_match_max_px},
           {"feature_visibility_window_px", p.feature_visibility_window_px},
+          {"pose_guess_offset_m", p.pose_guess_offset_m},
+          {"pose_guess_offset_deg", p.pose_guess_offset_deg},
           {"distance_bin_m", p.distance_bin_m}};
 }
 
@@ -300,6 +302,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
   };
   auto distanceBin = [&](double d) { return static_cast<int>(std::floor(d / p.distance_bin_m)); };
   std::vector<Tally*> tallies = {&state_->total, &case_tally};
+  const std::string where =
+      state_->cases.back().first.name + " frame " + std::to_string(truth.frame_index);
   for (Tally* t : tallies) ++t->frames;
 
   // Events for the gallery: (kind, severity, region, overlays, caption).
@@ -397,7 +401,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
                           {b.centre_px.x() - b.radius_px, b.centre_px.y() - b.radius_px,
                            b.centre_px.x() + b.radius_px, b.centre_px.y() + b.radius_px},
                           ov,
-                          "frame " + std::to_string(truth.frame_index) + ": missed ball, r " +
+                          where + ": missed ball, r " +
                               fmt(b.radius_px, 1) + " px, " + fmt(b.distance_m) + " m, visible " +
                               fmt(100 * b.visible_fraction, 0) + " %"});
       }
@@ -418,7 +422,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
                         {q.centre_px.x() - q.radius_px, q.centre_px.y() - q.radius_px,
                          q.centre_px.x() + q.radius_px, q.centre_px.y() + q.radius_px},
                         {o},
-                        "frame " + std::to_string(truth.frame_index) + ": false ball, confidence " +
+                        where + ": false ball, confidence " +
                             fmt(q.confidence)});
     }
   }
@@ -526,7 +530,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
           }
         }
         events.push_back({"missed_robot", r.visible_fraction, r.box, ov,
-                          "frame " + std::to_string(truth.frame_index) + ": missed robot " +
+                          where + ": missed robot " +
                               std::to_string(r.index) + ", " + fmt(r.distance_m) + " m, visible " +
                               fmt(100 * r.visible_fraction, 0) + " %"});
       } else if (pc.orientation_stage && raw == OrientationClass::kFalsePositive) {
@@ -535,7 +539,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
         o.box = percepts[pi].box;
         o.label = "est " + fmt(percepts[pi].orientation_raw->angle_rad / kDeg, 0) + " deg";
         events.push_back({"orientation", 1.0, r.box, {robotOverlay(r), o},
-                          "frame " + std::to_string(truth.frame_index) + ": orientation false positive, true " +
+                          where + ": orientation false positive, true " +
                               fmt(r.heading_in_observer_rad / kDeg, 0) + " deg (observer frame), " +
                               fmt(rel_deg, 0) + " deg to the line of sight"});
       }
@@ -549,7 +553,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       for (Tally* t : tallies) ++t->robot.false_positives;
       ++frame_errors;
       events.push_back({"false_robot", percepts[pi].confidence, percepts[pi].box, {o},
-                        "frame " + std::to_string(truth.frame_index) + ": false robot, confidence " +
+                        where + ": false robot, confidence " +
                             fmt(percepts[pi].confidence)});
     }
   }
@@ -678,7 +682,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
   if (frame_errors > 0) {
     offer("worst_frame", frame_errors, p.gallery_worst_frames, [&] {
       GalleryItem g;
-      g.caption = "frame " + std::to_string(truth.frame_index) + ": " + std::to_string(frame_errors) +
+      g.caption = where + ": " + std::to_string(frame_errors) +
                   " misses and false detections (green truth, red percepts)";
       g.png_base64 = cropPngBase64(*image, {0, 0, static_cast<double>(image->width()), static_cast<double>(image->height())},
                                    frame_overlays, std::max(image->width(), kFrameThumbWidthPx));

@@ -31,6 +31,8 @@ ScoringParams ScoringParams::load(const std::string& path) {
   p.intersection_match_max_px = f.getInRange("intersection_match_max_px", 0.1, 1000);
   p.feature_visibility_window_px =
       static_cast<int>(f.getInRange("feature_visibility_window_px", 0, 100));
+  p.pose_guess_offset_m = f.getInRange("pose_guess_offset_m", 0, 5);
+  p.pose_guess_offset_deg = f.getInRange("pose_guess_offset_deg", -90, 90);
   p.distance_bin_m = f.getInRange("distance_bin_m", 0.05, 100);
   p.gallery_max_crops = static_cast<int>(f.getInRange("gallery_max_crops", 0, 1000));
   p.gallery_worst_frames = static_cast<int>(f.getInRange("gallery_worst_frames", 0, 1000));

@@ -33,6 +33,10 @@ struct ScoringParams {
   double line_match_max_px = 6.0;
   double intersection_match_max_px = 12.0;
   int feature_visibility_window_px = 3;
+  /// The feature-based pose fit starts from the true pose moved by this much (diagonally) and
+  /// turned by this angle, so a fit that does not move shows the offset as its error.
+  double pose_guess_offset_m = 0.2;
+  double pose_guess_offset_deg = 5.0;
   // Report.
   double distance_bin_m = 0.5;
   int gallery_max_crops = 24;
