@@ -373,7 +373,9 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
   static const std::vector<std::pair<std::string, std::string>> kKinds = {
       {"worst_frame", "Worst frames"}, {"missed_ball", "Missed balls (most visible first)"},
       {"false_ball", "False balls (most confident first)"}, {"missed_robot", "Missed robots (most visible first)"},
-      {"false_robot", "False robots (most confident first)"}, {"orientation", "Orientation false positives"}};
+      {"false_robot", "False robots (most confident first)"}, {"orientation", "Orientation false positives"},
+      {"missed_intersection", "Missed L/T/X intersections (first seen)"},
+      {"false_intersection", "False L/T/X intersections (first seen)"}};
   bool any = false;
   for (const auto& [kind, title] : kKinds) {
     std::vector<const GalleryItem*> items;

@@ -178,6 +178,7 @@ json paramsJson(const ScoringParams& p) {
           {"robot_match_max_feet_distance_m", p.robot_match_max_feet_distance_m},
           {"orientation_tolerance_deg", p.orientation_tolerance_deg},
           {"orientation_heading_bin_deg", p.orientation_heading_bin_deg},
+          {"field_feature_max_distance_m", p.field_feature_max_distance_m},
           {"line_min_length_px", p.line_min_length_px},
           {"line_match_max_px", p.line_match_max_px},
           {"intersection_match_max_px", p.intersection_match_max_px},
@@ -594,6 +595,38 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     }
     const Matching mm = matchOneToOne(static_cast<int>(fi.penalty_marks.size()),
                                       static_cast<int>(ff.penalty_marks.size()), mark_cands);
+    auto cross = [](const Eigen::Vector2d& at, Overlay::Role role, IntersectionType type) {
+      Overlay o;
+      o.shape = Overlay::Shape::kCross;
+      o.role = role;
+      o.a = at;
+      o.label = intersectionTypeName(type);
+      return o;
+    };
+    const double pad = 3 * p.intersection_match_max_px;
+    for (std::size_t ti = 0; ti < fi.intersections.size(); ++ti) {
+      if (mi.truth_to_percept[ti] >= 0) continue;
+      const auto& x = fi.intersections[ti];
+      std::vector<Overlay> ov = {cross(x.position_px, Overlay::Role::kTruth, x.type)};
+      for (const auto& q : ff.intersections) {
+        if ((q.position_px - x.position_px).norm() < pad) ov.push_back(cross(q.position_px, Overlay::Role::kPercept, q.type));
+      }
+      events.push_back({"missed_intersection", 0.0,
+                        {x.position_px.x() - pad, x.position_px.y() - pad, x.position_px.x() + pad, x.position_px.y() + pad},
+                        ov, where + ": missed " + intersectionTypeName(x.type) + " at field (" +
+                            fmt(x.position_in_field.x()) + ", " + fmt(x.position_in_field.y()) + ")"});
+    }
+    for (std::size_t pi = 0; pi < ff.intersections.size(); ++pi) {
+      if (mi.percept_to_truth[pi] >= 0) continue;
+      const auto& q = ff.intersections[pi];
+      std::vector<Overlay> ov = {cross(q.position_px, Overlay::Role::kPercept, q.type)};
+      for (const auto& x : fi.intersections) {
+        if ((q.position_px - x.position_px).norm() < pad) ov.push_back(cross(x.position_px, Overlay::Role::kTruth, x.type));
+      }
+      events.push_back({"false_intersection", 0.0,
+                        {q.position_px.x() - pad, q.position_px.y() - pad, q.position_px.x() + pad, q.position_px.y() + pad},
+                        ov, where + ": false " + intersectionTypeName(q.type)});
+    }
     const bool circle_hit = fi.centre_circle_in_view && ff.centre_circle && fi.circle_centre_px &&
                             (ff.centre_circle->centre_px - *fi.circle_centre_px).norm() <=
                                 p.intersection_match_max_px;

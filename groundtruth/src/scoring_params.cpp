@@ -26,6 +26,7 @@ ScoringParams ScoringParams::load(const std::string& path) {
   p.robot_match_max_feet_distance_m = f.getInRange("robot_match_max_feet_distance_m", 0, 10);
   p.orientation_tolerance_deg = f.getInRange("orientation_tolerance_deg", 0.1, 90);
   p.orientation_heading_bin_deg = f.getInRange("orientation_heading_bin_deg", 1, 360);
+  p.field_feature_max_distance_m = f.getInRange("field_feature_max_distance_m", 0.1, 100);
   p.line_min_length_px = f.getInRange("line_min_length_px", 1, 10000);
   p.line_match_max_px = f.getInRange("line_match_max_px", 0.1, 1000);
   p.intersection_match_max_px = f.getInRange("intersection_match_max_px", 0.1, 1000);
@@ -77,7 +78,8 @@ std::string ScoringParams::matchingRule() const {
     << robot_match_max_feet_distance_m << " m of the true ground point. Orientation tolerance "
     << orientation_tolerance_deg << " deg. Lines: both ends of a detected segment within "
     << line_match_max_px << " px of a true line in view (at least " << line_min_length_px
-    << " px of it visible). Intersections: same type within " << intersection_match_max_px
+    << " px of it visible within " << field_feature_max_distance_m
+    << " m of the observer). Intersections: same type within " << intersection_match_max_px
     << " px.";
   return s.str();
 }

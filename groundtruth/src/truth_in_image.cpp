@@ -417,12 +417,37 @@ double visibleLength(const ObjectMap& map, bool use_map, const Eigen::Vector2d& 
   return len * seen / (n + 1);
 }
 
+// The part of the ground segment a-b within `radius` of `centre`; empty when none.
+std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> clipToDisc(const Eigen::Vector2d& a,
+                                                                      const Eigen::Vector2d& b,
+                                                                      const Eigen::Vector2d& centre,
+                                                                      double radius) {
+  const Eigen::Vector2d d = b - a, m = a - centre;
+  const double qa = d.squaredNorm(), qb = 2 * m.dot(d), qc = m.squaredNorm() - radius * radius;
+  if (qa <= 0) return qc <= 0 ? std::make_optional(std::make_pair(a, b)) : std::nullopt;
+  const double disc = qb * qb - 4 * qa * qc;
+  if (disc < 0) return std::nullopt;
+  const double t0 = std::max(0.0, (-qb - std::sqrt(disc)) / (2 * qa));
+  const double t1 = std::min(1.0, (-qb + std::sqrt(disc)) / (2 * qa));
+  if (t0 >= t1) return std::nullopt;
+  return std::make_pair(Eigen::Vector2d(a + t0 * d), Eigen::Vector2d(a + t1 * d));
+}
+
 FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool use_map,
                           const FieldMarkings& model, const ScoringParams& params) {
   FieldInImage f;
   const int win = params.feature_visibility_window_px;
+  const Eigen::Vector2d observer(w.observer.x_m, w.observer.y_m);
+  const double max_d = params.field_feature_max_distance_m;
+  // Field markings beyond the feature distance are left out, on the ground.
+  auto project = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b)
+      -> std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> {
+    const auto near = clipToDisc(a, b, observer, max_d);
+    if (!near) return std::nullopt;
+    return proj.segment({near->first.x(), near->first.y(), 0}, {near->second.x(), near->second.y(), 0});
+  };
   for (const auto& line : model.lines) {
-    const auto s = proj.segment({line.start.x(), line.start.y(), 0}, {line.end.x(), line.end.y(), 0});
+    const auto s = project(line.start, line.end);
     if (!s) continue;
     LineInImage li{line.name, false, s->first, s->second, 0};
     li.visible_length_px = visibleLength(w.object_map, use_map, s->first, s->second, win);
@@ -435,7 +460,7 @@ FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool 
     const double t0 = 2 * kPi * k / kCirclePieces, t1 = 2 * kPi * (k + 1) / kCirclePieces;
     const Eigen::Vector2d a = cc + model.centre_circle_radius_m * Eigen::Vector2d(std::cos(t0), std::sin(t0));
     const Eigen::Vector2d b = cc + model.centre_circle_radius_m * Eigen::Vector2d(std::cos(t1), std::sin(t1));
-    const auto s = proj.segment({a.x(), a.y(), 0}, {b.x(), b.y(), 0});
+    const auto s = project(a, b);
     if (!s) continue;
     LineInImage li{"centre circle", true, s->first, s->second, 0};
     li.visible_length_px = visibleLength(w.object_map, use_map, s->first, s->second, win);
@@ -445,6 +470,7 @@ FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool 
   f.centre_circle_in_view = circle_visible >= params.line_min_length_px;
   f.circle_centre_px = proj.project({cc.x(), cc.y(), 0});
   auto pointInView = [&](const Eigen::Vector2d& g) -> std::optional<Eigen::Vector2d> {
+    if ((g - observer).norm() > max_d) return std::nullopt;
     const auto p = proj.project({g.x(), g.y(), 0});
     if (!p || !proj.inImage(*p) || p->x() >= proj.width() || p->y() >= proj.height()) return std::nullopt;
     if (use_map && !hasLabelNear(w.object_map, *p, win, kObjectLine)) return std::nullopt;

@@ -250,6 +250,21 @@ TEST(TruthInImage, IntersectionsAndMarksInViewNeedLinePixels) {
   auto t = computeFrameTruth(s, field, {}, ScoringParams{});
   ASSERT_FALSE(t.field.penalty_marks.empty());
   ASSERT_FALSE(t.field.intersections.empty());
+  // Markings beyond the feature distance do not count (the nearest, the penalty mark, is 2.35 m away).
+  ScoringParams near;
+  near.field_feature_max_distance_m = 2.3;
+  const auto far = computeFrameTruth(s, field, {}, near);
+  EXPECT_TRUE(far.field.penalty_marks.empty());
+  EXPECT_TRUE(far.field.intersections.empty());
+  near.field_feature_max_distance_m = 2.4;
+  EXPECT_EQ(computeFrameTruth(s, field, {}, near).field.penalty_marks.size(), 1u);
+  for (const auto& l : far.field.lines) {
+    for (const auto& q : {l.start_px, l.end_px}) {
+      const auto g = s.camera.model.pixelToGround(q);
+      ASSERT_TRUE(g);
+      EXPECT_LE(g->norm(), 2.3 + 1e-6) << l.name;
+    }
+  }
   // With an object map that shows no line at all, nothing is in view.
   s.object_map = emptyMap(320, 240);
   t = computeFrameTruth(s, field, {}, ScoringParams{});

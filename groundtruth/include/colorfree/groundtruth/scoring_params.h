@@ -29,6 +29,7 @@ struct ScoringParams {
   double orientation_tolerance_deg = 11.25;
   double orientation_heading_bin_deg = 22.5;
   // Field features.
+  double field_feature_max_distance_m = 6.0;  ///< markings farther from the observer are left out
   double line_min_length_px = 20.0;
   double line_match_max_px = 6.0;
   double intersection_match_max_px = 12.0;
