@@ -315,7 +315,7 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
     }
     if (values.size() < 2) continue;
     // Cases that share a value of this setting are pooled by their counts.
-    std::map<double, std::array<long, 4>> pooled;
+    std::map<double, std::array<long, 8>> pooled;
     for (const auto& c : cases) {
       if (!c["settings"].contains(key)) continue;
       auto& a = pooled[c["settings"][key].get<double>()];
@@ -323,13 +323,24 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
       a[1] += c["ball"]["counts"]["truths"].get<long>();
       a[2] += c["robot"]["counts"]["detected"].get<long>();
       a[3] += c["robot"]["counts"]["truths"].get<long>();
+      const json& fc = c["field_features"]["counts"];
+      a[4] += fc["lines_detected"].get<long>();
+      a[5] += fc["lines_in_view"].get<long>();
+      a[6] += fc["intersections_detected"].get<long>();
+      a[7] += fc["intersections_in_view"].get<long>();
     }
     Series ball{"ball", "#1f6fd1", {}}, robot{"robot", "#d6453d", {}};
+    Series lines{"field lines", "#2e9d4a", {}}, crossings{"L/T/X", "#8e44ad", {}};
+    auto ratio = [](bool present, long num, long den) {
+      return present && den > 0 ? json(static_cast<double>(num) / den) : json(nullptr);
+    };
     for (const auto& [v, a] : pooled) {
-      ball.points.push_back({v, bd && a[1] > 0 ? json(static_cast<double>(a[0]) / a[1]) : json(nullptr)});
-      robot.points.push_back({v, rd && a[3] > 0 ? json(static_cast<double>(a[2]) / a[3]) : json(nullptr)});
+      ball.points.push_back({v, ratio(bd, a[0], a[1])});
+      robot.points.push_back({v, ratio(rd, a[2], a[3])});
+      lines.points.push_back({v, ratio(ffr, a[4], a[5])});
+      crossings.points.push_back({v, ratio(ffr, a[6], a[7])});
     }
-    h << lineChart("Detection rate against " + key, key, {ball, robot});
+    h << lineChart("Detection rate against " + key, key, {ball, robot, lines, crossings});
     any_chart = true;
   }
   Series bdist{"ball", "#1f6fd1", {}}, rdist{"robot", "#d6453d", {}};
