@@ -18,7 +18,7 @@ constexpr const char* kInertial = R"(<inertial pos="0 0 0" mass="0.05" diaginert
 
 class Writer {
  public:
-  explicit Writer(const NaoLook& look) : look_(look) { os_.setf(std::ios::fixed); os_.precision(5); }
+  explicit Writer(const NaoLook& look) : look_(look) { os_.setf(std::ios::fixed); os_.precision(8); }
 
   void open(const std::string& body, const Eigen::Vector3d& pos, const char* joint,
             const Eigen::Vector3d& axis) {
@@ -61,7 +61,7 @@ class Writer {
   static std::string s(double x) {
     std::ostringstream o;
     o.setf(std::ios::fixed);
-    o.precision(5);
+    o.precision(8);
     o << x;
     return o.str();
   }
@@ -139,9 +139,8 @@ std::string naoMjcf(const NaoLook& look) {
   w.raw("<body name=\"" + p + "torso\" mocap=\"true\" pos=\"0 0 0.33\">\n");
   // Chest, jersey over the belly, back pack, pelvis, neck.
   w.ellipsoid(V(-0.008, 0, 0.055), V(0.06, 0.076, 0.07), "nao_white");
-  w.ellipsoid(V(-0.008, 0, 0.0), V(0.065, 0.08, 0.06), look.jersey_material);
+  w.ellipsoid(V(-0.015, 0, 0.0), V(0.055, 0.08, 0.058), look.jersey_material);
   w.box(V(-0.06, 0, 0.04), V(0.012, 0.05, 0.055), "nao_grey");
-  w.sphere(V(0.058, 0, 0.075), 0.012, "nao_dark");
   w.box(V(-0.01, 0, -n.hip_offset_z + 0.025), V(0.045, 0.075, 0.02), "nao_grey");
   w.cylinder(V(0, 0, n.neck_offset_z - 0.012), 0.022, 0.014, "nao_grey");
   w.open("head_yaw", V(0, 0, n.neck_offset_z), "HeadYaw", V(0, 0, 1));

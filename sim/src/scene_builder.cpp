@@ -16,14 +16,12 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 // Look of the field and the hall. Sizes of the field itself come from FieldDimensions only.
-constexpr int kCarpetTexturePx = 2048;
-constexpr double kCarpetTileM = 2.6;
-constexpr int kLineTexturePx = 512;
-constexpr double kLineTileM = 0.65;
+constexpr int kCarpetTexturePx = 1024;
+constexpr double kCarpetTileM = 1.3;
 constexpr int kBallFacePx = 128;
-constexpr double kCarpetGridM = 0.1;       // plane tessellation: per-vertex lighting resolution
-constexpr double kCarpetTopZ = -0.0015;    // carpet just below z = 0 so lines sit on top of it
-constexpr double kLineTopZ = 0.0005;
+constexpr double kCarpetGridM = 0.2;       // plane tessellation: per-vertex lighting resolution
+constexpr double kCarpetTopZ = -0.001;     // carpet just below z = 0 so lines sit on top of it
+constexpr double kLineTopZ = 0.0;  // the lines' top is the ground plane the camera model sees
 // Line boxes reach well below the carpet: their bottom faces then stay clear of the carpet in
 // the shadow map (no shadow acne on the lines).
 constexpr double kLineBottomZ = -0.02;
@@ -32,6 +30,12 @@ constexpr double kHallMarginXM = 4.5;      // carpet edge to end wall
 constexpr double kHallMarginYM = 3.5;      // carpet edge to side wall
 constexpr double kHallHeightM = 4.5;
 constexpr int kCircleSegments = 64;
+// Tessellation and shadow map: llvmpipe's vertex work grows with the triangles of every round
+// geom (6 NAOs, nets, people), its fill work with the shadow map's size.
+constexpr int kRoundSlices = 16;
+constexpr int kRoundStacks = 8;
+constexpr int kBoxQuads = 2;
+constexpr int kShadowMapPx = 2048;
 constexpr double kNetSpacingM = 0.1;
 constexpr double kNetStringRadiusM = 0.004;
 constexpr int kPeople = 12;
@@ -40,7 +44,7 @@ constexpr int kBoardVariants = 4;
 // Grey levels (material rgba) chosen so that the normal preset gives luma values close to a NAO's
 // view of an SPL field: carpet about 80..100, lines about 200..220, robots near white.
 constexpr double kCarpetGray = 0.47;
-constexpr double kLineGray = 0.7;
+constexpr double kLineGray = 0.62;
 
 std::string f(double x) {
   std::ostringstream o;
@@ -59,8 +63,8 @@ class SceneWriter {
   int geom_count = 0;
 
   void texture2d(const std::string& name, const GrayTexture& tex) {
-    const std::string file = name + ".png";
-    model.files[file] = encodePng(tex);
+    const std::string file = name + ".tex";
+    model.files[file] = encodeMujocoCustom(tex);
     assets << "<texture name=\"" << name << "\" type=\"2d\" file=\"" << file << "\"/>\n";
   }
   void material(const std::string& name, const std::string& texture, double gray, double texrepeat,
@@ -113,46 +117,96 @@ class SceneWriter {
   }
 };
 
+// Many boxes as one mesh geom: one draw call instead of one per box (llvmpipe spends tens of
+// microseconds on each). Every face has its own four vertices so that it is shaded flat.
+class BoxMesh {
+ public:
+  // Box at `c` with unit axes (columns, right-handed) and half sizes along them.
+  void add(const Eigen::Vector3d& c, const Eigen::Matrix3d& axes, const Eigen::Vector3d& half) {
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      for (double sign : {1.0, -1.0}) {
+        const Eigen::Vector3d centre = c + sign * half[i] * axes.col(i);
+        const Eigen::Vector3d tj = half[j] * axes.col(j), tk = half[k] * axes.col(k);
+        Eigen::Vector3d corners[4] = {centre - tj - tk, centre + tj - tk, centre + tj + tk,
+                                      centre - tj + tk};
+        if (sign < 0) std::swap(corners[1], corners[3]);
+        const int base = vertex_count_;
+        for (const auto& v : corners) {
+          vertices_ << f3(v.x(), v.y(), v.z()) << " ";
+          ++vertex_count_;
+        }
+        faces_ << base << " " << base + 1 << " " << base + 2 << " " << base << " " << base + 2
+               << " " << base + 3 << " ";
+      }
+    }
+  }
+  // A bar of square cross-section between two points.
+  void addBar(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double half_width) {
+    const Eigen::Vector3d a0 = (p1 - p0).normalized();
+    const Eigen::Vector3d ref = std::abs(a0.z()) > 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d a1 = ref.cross(a0).normalized();
+    Eigen::Matrix3d axes;
+    axes << a0, a1, a0.cross(a1);
+    add((p0 + p1) / 2, axes, Eigen::Vector3d((p1 - p0).norm() / 2, half_width, half_width));
+  }
+  void write(SceneWriter& w, const std::string& mesh_name, const std::string& geom_prefix,
+             const std::string& material) const {
+    w.assets << "<mesh name=\"" << mesh_name << "\" vertex=\"" << vertices_.str() << "\" face=\""
+             << faces_.str() << "\"/>\n";
+    w.geom(geom_prefix, "mesh", "mesh=\"" + mesh_name + "\"", material);
+  }
+
+ private:
+  std::ostringstream vertices_, faces_;
+  int vertex_count_ = 0;
+};
+
 // A field line between two centre points, `width` wide, extended by `extend` at both ends.
-void lineBox(SceneWriter& w, const FieldDimensions& fd, double x0, double y0, double x1, double y1,
+void lineBox(BoxMesh& mesh, const FieldDimensions& fd, double x0, double y0, double x1, double y1,
              double extend) {
   const double len = std::hypot(x1 - x0, y1 - y0);
   const double half_h = (kLineTopZ - kLineBottomZ) / 2;
-  w.box(kLinePrefix, (x0 + x1) / 2, (y0 + y1) / 2, kLineBottomZ + half_h, len / 2 + extend,
-        fd.line_width_m / 2, half_h, std::atan2(y1 - y0, x1 - x0), "line");
+  const double yaw = std::atan2(y1 - y0, x1 - x0);
+  Eigen::Matrix3d axes;
+  axes << std::cos(yaw), -std::sin(yaw), 0, std::sin(yaw), std::cos(yaw), 0, 0, 0, 1;
+  mesh.add(Eigen::Vector3d((x0 + x1) / 2, (y0 + y1) / 2, kLineBottomZ + half_h), axes,
+           Eigen::Vector3d(len / 2 + extend, fd.line_width_m / 2, half_h));
 }
 
 void writeField(SceneWriter& w, const FieldDimensions& fd) {
+  BoxMesh lines;
   const double L = fd.halfLength(), W = fd.halfWidth(), hw = fd.line_width_m / 2;
   w.geom(kCarpetPrefix, "plane",
          "pos=\"0 0 " + f(kCarpetTopZ) + "\" size=\"" +
              f3(fd.carpetHalfLength(), fd.carpetHalfWidth(), kCarpetGridM) + "\"",
          "carpet");
-  lineBox(w, fd, -L, W, L, W, hw);
-  lineBox(w, fd, -L, -W, L, -W, hw);
-  lineBox(w, fd, 0, -W, 0, W, 0);
+  lineBox(lines, fd, -L, W, L, W, hw);
+  lineBox(lines, fd, -L, -W, L, -W, hw);
+  lineBox(lines, fd, 0, -W, 0, W, 0);
   for (double s : {-1.0, 1.0}) {
-    lineBox(w, fd, s * L, -W, s * L, W, hw);
+    lineBox(lines, fd, s * L, -W, s * L, W, hw);
     const double pa = s * (L - fd.penalty_area_length_m), pw = fd.penalty_area_width_m / 2;
-    lineBox(w, fd, pa, -pw, pa, pw, hw);
-    lineBox(w, fd, pa, pw, s * L, pw, hw);
-    lineBox(w, fd, pa, -pw, s * L, -pw, hw);
+    lineBox(lines, fd, pa, -pw, pa, pw, hw);
+    lineBox(lines, fd, pa, pw, s * L, pw, hw);
+    lineBox(lines, fd, pa, -pw, s * L, -pw, hw);
     const double ga = s * (L - fd.goal_area_length_m), gw = fd.goal_area_width_m / 2;
-    lineBox(w, fd, ga, -gw, ga, gw, hw);
-    lineBox(w, fd, ga, gw, s * L, gw, hw);
-    lineBox(w, fd, ga, -gw, s * L, -gw, hw);
+    lineBox(lines, fd, ga, -gw, ga, gw, hw);
+    lineBox(lines, fd, ga, gw, s * L, gw, hw);
+    lineBox(lines, fd, ga, -gw, s * L, -gw, hw);
     const double pm = s * (L - fd.penalty_mark_distance_m), arm = fd.penalty_mark_size_m / 2;
-    lineBox(w, fd, pm - arm, 0, pm + arm, 0, 0);
-    lineBox(w, fd, pm, -arm, pm, arm, 0);
+    lineBox(lines, fd, pm - arm, 0, pm + arm, 0, 0);
+    lineBox(lines, fd, pm, -arm, pm, arm, 0);
   }
   // Centre circle as chords; each chord is lengthened so neighbours meet at the outer edge.
   const double r = fd.centre_circle_diameter_m / 2;
   const double da = 2 * kPi / kCircleSegments;
   for (int i = 0; i < kCircleSegments; ++i) {
     const double a0 = i * da, a1 = (i + 1) * da;
-    lineBox(w, fd, r * std::cos(a0), r * std::sin(a0), r * std::cos(a1), r * std::sin(a1),
+    lineBox(lines, fd, r * std::cos(a0), r * std::sin(a0), r * std::cos(a1), r * std::sin(a1),
             hw * std::tan(da / 2));
   }
+  lines.write(w, "lines_mesh", kLinePrefix, "line");
 }
 
 void writeGoals(SceneWriter& w, const FieldDimensions& fd) {
@@ -174,19 +228,24 @@ void writeGoals(SceneWriter& w, const FieldDimensions& fd) {
     w.cylinder(kGoalPrefix, back, -post_y, pr * 0.4, back, post_y, pr * 0.4, pr * 0.4, "goal");
     // The net: strings on the back, the sides and the roof.
     const double sr = kNetStringRadiusM;
+    BoxMesh net;
+    const auto net_string = [&net, sr](double x0, double y0, double z0, double x1, double y1, double z1) {
+      net.addBar(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1), sr);
+    };
     for (double y = -post_y + kNetSpacingM; y < post_y - 1e-6; y += kNetSpacingM) {
-      w.capsule(kGoalPrefix, back, y, 0, back, y, top, sr, "net");
-      w.capsule(kGoalPrefix, x, y, top, back, y, top, sr, "net");
+      net_string(back, y, 0, back, y, top);
+      net_string(x, y, top, back, y, top);
     }
     for (double z = kNetSpacingM; z < top - 1e-6; z += kNetSpacingM) {
-      w.capsule(kGoalPrefix, back, -post_y, z, back, post_y, z, sr, "net");
-      for (double py : {-post_y, post_y}) w.capsule(kGoalPrefix, x, py, z, back, py, z, sr, "net");
+      net_string(back, -post_y, z, back, post_y, z);
+      for (double py : {-post_y, post_y}) net_string(x, py, z, back, py, z);
     }
     for (double d = kNetSpacingM; d < fd.goal_depth_m - 1e-6; d += kNetSpacingM) {
       const double xd = x + s * d;
-      w.capsule(kGoalPrefix, xd, -post_y, top, xd, post_y, top, sr, "net");
-      for (double py : {-post_y, post_y}) w.capsule(kGoalPrefix, xd, py, 0, xd, py, top, sr, "net");
+      net_string(xd, -post_y, top, xd, post_y, top);
+      for (double py : {-post_y, post_y}) net_string(xd, py, 0, xd, py, top);
     }
+    net.write(w, s > 0 ? "net_mesh_pos" : "net_mesh_neg", kGoalPrefix, "net");
   }
 }
 
@@ -282,18 +341,19 @@ void writeLights(SceneWriter& w, const SceneSpec& spec, std::mt19937_64& rng) {
     case LightingPreset::kFlicker:
     case LightingPreset::kDim:
     case LightingPreset::kOverexposed: {
-      const double k = spec.lighting == LightingPreset::kDim ? 0.5
+      const double k = spec.lighting == LightingPreset::kDim ? 0.6
                        : spec.lighting == LightingPreset::kOverexposed ? 2.0
                                                                         : 1.0;
       ambient *= k;
-      w.light(V(0.4, -0.3, lamp_z), V(0, 0, -1), false, true, 0.45 * k, 65);
-      w.light(V(0, 0, lamp_z), V(0.35, 0.25, -1), true, false, 0.12 * k);
-      w.light(V(0, 0, lamp_z), V(-0.35, -0.25, -1), true, false, 0.12 * k);
+      // Many hall lamps: soft, faint shadows; one lamp casts them, the others fill.
+      w.light(V(0.4, -0.3, lamp_z), V(0, 0, -1), false, true, 0.3 * k, 65);
+      w.light(V(0, 0, lamp_z), V(0.35, 0.25, -1), true, false, 0.2 * k);
+      w.light(V(0, 0, lamp_z), V(-0.35, -0.25, -1), true, false, 0.2 * k);
       break;
     }
     case LightingPreset::kDirectional:
-      ambient = 0.4;
-      w.light(V(fd.halfLength() * 0.5, -fd.halfWidth() * 0.5, 4), V(-0.5, 0.4, -0.6), true, true, 1.0);
+      ambient = 0.5;
+      w.light(V(fd.halfLength() * 0.5, -fd.halfWidth() * 0.5, 4), V(-0.5, 0.4, -0.6), true, true, 1.1);
       break;
     case LightingPreset::kUneven: {
       ambient = 0.5;
@@ -303,7 +363,7 @@ void writeLights(SceneWriter& w, const SceneSpec& spec, std::mt19937_64& rng) {
       const V sun = V(0.25, -0.45, -1).normalized();
       for (int i = 0; i < 4; ++i) {
         const V target((u(rng) * 2 - 1) * fd.halfLength(), (u(rng) * 2 - 1) * fd.halfWidth(), 0);
-        w.light(target - sun * 3.5, sun, false, false, 0.9, 10 + 8 * u(rng));
+        w.light(target - sun * 3.5, sun, false, false, 1.3, 10 + 8 * u(rng));
       }
       break;
     }
@@ -389,15 +449,13 @@ SceneModel buildScene(const SceneSpec& spec) {
   // Textures and materials.
   const GrayTexture carpet = carpetTexture(spec.seed, kCarpetTexturePx);
   w.texture2d("carpet_tex", carpet);
-  GrayTexture line = carpetTexture(spec.seed + 1, kLineTexturePx);
-  for (auto& p : line.pixels) p = std::uint8_t(190 + p / 4);
-  w.texture2d("line_tex", line);
-  const auto faces = ballCubeFaces(kBallFacePx);
+  // The print does not depend on the seed: made once per process.
+  static const std::vector<GrayTexture> faces = ballCubeFaces(kBallFacePx);
   const char* face_names[] = {"right", "left", "up", "down", "front", "back"};
   w.assets << "<texture name=\"ball_tex\" type=\"cube\"";
   for (int i = 0; i < 6; ++i) {
-    const std::string file = std::string("ball_") + face_names[i] + ".png";
-    w.model.files[file] = encodePng(faces[i]);
+    const std::string file = std::string("ball_") + face_names[i] + ".tex";
+    w.model.files[file] = encodeMujocoCustom(faces[i]);
     w.assets << " file" << face_names[i] << "=\"" << file << "\"";
   }
   w.assets << "/>\n";
@@ -414,7 +472,9 @@ SceneModel buildScene(const SceneSpec& spec) {
     w.texture2d("cloth" + std::to_string(i) + "_tex", hallTexture(HallTexture::kCloth, s, i, 64, 64));
   }
   w.material("carpet", "carpet_tex", kCarpetGray, 1 / kCarpetTileM);
-  w.material("line", "line_tex", kLineGray, 1 / kLineTileM);
+  // Lines are flat white: where two line boxes overlap (corners, crossings, circle chords) their
+  // coplanar tops then look the same whichever wins the depth test.
+  w.material("line", "", kLineGray, 0);
   w.material("goal", "", 0.93, 0, 0.2, 0.3);
   w.material("net", "", 0.8, 0);
   w.material("ball", "ball_tex", 1.0, 1, 0.15, 0.2);
@@ -464,13 +524,15 @@ SceneModel buildScene(const SceneSpec& spec) {
     << "<option gravity=\"0 0 0\"/>\n"
     << "<visual>\n"
     << "<global offwidth=\"" << spec.max_width_px << "\" offheight=\"" << spec.max_height_px << "\"/>\n"
-    << "<quality shadowsize=\"2048\" offsamples=\"" << spec.multisamples << "\"/>\n"
+    << "<quality shadowsize=\"" << kShadowMapPx << "\" offsamples=\"" << spec.multisamples
+    << "\" numslices=\"" << kRoundSlices << "\" numstacks=\"" << kRoundStacks << "\" numquads=\"" << kBoxQuads << "\"/>\n"
     << "<headlight active=\"1\" ambient=\"" << f3(w.model.headlight_ambient, w.model.headlight_ambient,
                                                   w.model.headlight_ambient)
     << "\" diffuse=\"0 0 0\" specular=\"0 0 0\"/>\n"
-    // Near clip 1 cm so that the bottom camera sees the own chest and feet; shadows of the
-    // directional light cover the carpet.
-    << "<map znear=\"0.01\" zfar=\"60\" haze=\"0\" shadowclip=\"" << f(fd.carpetHalfLength() + 1)
+    // Near clip 3 cm so that the bottom camera sees the own chest and feet, while the depth
+    // buffer still separates lines and carpet (1 mm) 10 m away; shadows of the directional light
+    // cover the carpet.
+    << "<map znear=\"0.03\" zfar=\"60\" haze=\"0\" shadowclip=\"" << f(fd.carpetHalfLength() + 1)
     << "\" shadowscale=\"0.8\"/>\n"
     << "</visual>\n"
     << "<statistic extent=\"1\" center=\"0 0 0\"/>\n"

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
@@ -283,6 +284,17 @@ std::vector<std::uint8_t> encodePng(const GrayTexture& texture) {
   std::vector<std::uint8_t> bytes;
   if (!cv::imencode(".png", m, bytes, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
     throw Error("texture: PNG encoding failed");
+  }
+  return bytes;
+}
+
+std::vector<std::uint8_t> encodeMujocoCustom(const GrayTexture& texture) {
+  std::vector<std::uint8_t> bytes(8 + texture.pixels.size() * 3);
+  const std::int32_t size[2] = {texture.width, texture.height};
+  std::memcpy(bytes.data(), size, sizeof(size));
+  std::uint8_t* rgb = bytes.data() + 8;
+  for (std::size_t i = 0; i < texture.pixels.size(); ++i) {
+    rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = texture.pixels[i];
   }
   return bytes;
 }

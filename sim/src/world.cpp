@@ -48,6 +48,38 @@ NaoHandles findNao(const mjModel* m, const std::string& prefix) {
   return h;
 }
 
+// Objects further outside the view than this may still cast a shadow into it (a standing NAO
+// under a light 35° above the horizon).
+constexpr double kShadowCasterMarginM = 1.0;
+
+// Drops the scene's geoms whose bounding spheres lie outside the camera's view (widened by
+// `margin_m`): llvmpipe transforms and lights every vertex it is given, seen or not.
+void cullOutsideView(mjvScene& scn, const CameraIntrinsics& k, double margin_m) {
+  const mjvGLCamera& c = scn.camera[0];
+  const Eigen::Vector3d pos(c.pos[0], c.pos[1], c.pos[2]);
+  const Eigen::Vector3d forward = Eigen::Vector3d(c.forward[0], c.forward[1], c.forward[2]).normalized();
+  const Eigen::Vector3d up = Eigen::Vector3d(c.up[0], c.up[1], c.up[2]).normalized();
+  const Eigen::Vector3d right = forward.cross(up);
+  const double tan_x = (k.width_px / 2.0) / k.focal_x_px;
+  const double tan_y = (k.height_px / 2.0) / k.focal_y_px;
+  const double sec_x = std::sqrt(1 + tan_x * tan_x), sec_y = std::sqrt(1 + tan_y * tan_y);
+  int kept = 0;
+  for (int i = 0; i < scn.ngeom; ++i) {
+    const mjvGeom& g = scn.geoms[i];
+    bool visible = true;
+    // Planes and decor have no bounding sphere: always drawn.
+    if (g.modelrbound > 0) {
+      const Eigen::Vector3d d = Eigen::Vector3d(g.pos[0], g.pos[1], g.pos[2]) - pos;
+      const double r = g.modelrbound + margin_m;
+      const double z = d.dot(forward);
+      visible = z > -r && std::abs(d.dot(right)) <= z * tan_x + r * sec_x &&
+                std::abs(d.dot(up)) <= z * tan_y + r * sec_y;
+    }
+    if (visible) scn.geoms[kept++] = g;
+  }
+  scn.ngeom = kept;
+}
+
 }  // namespace
 
 LightingPreset lightingPresetFromName(const std::string& name) {
@@ -92,7 +124,9 @@ struct World::Impl {
   mjvOption opt;
   mjvCamera cam;
   mjrContext con;
-  bool scene_made = false, context_made = false;
+  // The object map is drawn without anti-aliasing: a second renderer context without MSAA.
+  mjrContext con_segment;
+  bool scene_made = false, context_made = false, segment_context_made = false;
   std::vector<std::uint16_t> geom_label;
   NaoHandles observer;
   std::vector<NaoHandles> robots;
@@ -102,10 +136,9 @@ struct World::Impl {
   std::vector<std::uint8_t> rgb;
 
   ~Impl() {
-    if (context_made) {
-      gl->makeCurrent();
-      mjr_freeContext(&con);
-    }
+    if (context_made || segment_context_made) gl->makeCurrent();
+    if (context_made) mjr_freeContext(&con);
+    if (segment_context_made) mjr_freeContext(&con_segment);
     if (scene_made) mjv_freeScene(&scn);
     if (data != nullptr) mj_deleteData(data);
   }
@@ -211,6 +244,14 @@ World::World(const SceneSpec& spec) : impl_(std::make_unique<Impl>()) {
   w.context_made = true;
   mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   if (w.con.currentBuffer != mjFB_OFFSCREEN) throw Error("world: no off-screen framebuffer");
+  const int samples = m->vis.quality.offsamples;
+  m->vis.quality.offsamples = 0;
+  mjr_defaultContext(&w.con_segment);
+  mjr_makeContext(m, &w.con_segment, mjFONTSCALE_100);
+  w.segment_context_made = true;
+  m->vis.quality.offsamples = samples;
+  mjr_setBuffer(mjFB_OFFSCREEN, &w.con_segment);
+  if (w.con_segment.currentBuffer != mjFB_OFFSCREEN) throw Error("world: no off-screen framebuffer");
   if (w.con.offWidth < spec.max_width_px || w.con.offHeight < spec.max_height_px) {
     throw Error("world: off-screen framebuffer is smaller than asked for");
   }
@@ -295,14 +336,15 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
   w.cam.fixedcamid = id;
 
   w.gl->makeCurrent();
-  mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   w.scn.flags[mjRND_SHADOW] = w.spec.shadows ? 1 : 0;
   w.scn.flags[mjRND_SKYBOX] = 0;
   w.scn.flags[mjRND_REFLECTION] = 0;
   w.scn.flags[mjRND_SEGMENT] = 0;
   w.scn.flags[mjRND_IDCOLOR] = 0;
   mjv_updateScene(m, w.data, &w.opt, nullptr, &w.cam, mjCAT_ALL, &w.scn);
+  cullOutsideView(w.scn, k, w.spec.shadows ? kShadowCasterMarginM : 0.0);
   const mjrRect viewport{0, 0, width_px, height_px};
+  mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   mjr_render(viewport, &w.scn, &w.con);
   mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con);
 
@@ -322,12 +364,15 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
     w.scn.flags[mjRND_SHADOW] = 0;
     w.scn.flags[mjRND_SEGMENT] = 1;
     w.scn.flags[mjRND_IDCOLOR] = 1;
-    mjr_render(viewport, &w.scn, &w.con);
-    mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con);
+    mjr_setBuffer(mjFB_OFFSCREEN, &w.con_segment);
+    mjr_render(viewport, &w.scn, &w.con_segment);
+    mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con_segment);
     w.scn.flags[mjRND_SEGMENT] = 0;
     w.scn.flags[mjRND_IDCOLOR] = 0;
     // segid + 1 per pixel; segid indexes the scene's geoms.
-    std::vector<std::uint16_t> seg_label(std::size_t(w.scn.ngeom) + 1, kObjectNone);
+    int max_segid = 0;
+    for (int i = 0; i < w.scn.ngeom; ++i) max_segid = std::max(max_segid, w.scn.geoms[i].segid);
+    std::vector<std::uint16_t> seg_label(std::size_t(max_segid) + 2, kObjectNone);
     for (int i = 0; i < w.scn.ngeom; ++i) {
       const mjvGeom& g = w.scn.geoms[i];
       if (g.segid < 0 || g.objtype != mjOBJ_GEOM || g.objid < 0 || g.objid >= m->ngeom) continue;

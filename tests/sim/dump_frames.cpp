@@ -64,11 +64,21 @@ int main(int argc, char** argv) {
         r.posture = walkPosture(0.17 * i, i % 2 == 0 ? 0.15 : 0.0);
         world.setRobot(i, r);
       }
-      world.setBall(Eigen::Vector3d(2.2, -0.75, spec.field.ballRadius()),
+      world.setBall(Eigen::Vector3d(1.98, -0.62, spec.field.ballRadius()),
                     Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())));
       if (std::string(preset) == "flicker") world.setLighting({flickerScale(spec.seed, 3)});
-      for (const auto cam : {NaoCamera::kTop, NaoCamera::kBottom}) {
-        const std::string name = out + "/" + preset + (cam == NaoCamera::kTop ? "_top" : "_bottom");
+      for (const auto cam : {NaoCamera::kTop, NaoCamera::kBottom, NaoCamera::kTop}) {
+        const bool wide = cam == NaoCamera::kTop && obs.posture.head_pitch == 0.45;
+        const std::string name =
+            out + "/" + preset + (wide ? "_wide" : cam == NaoCamera::kTop ? "_top" : "_bottom");
+        if (wide) {
+          // From the centre circle towards the side with the people and the goal.
+          obs.pose = {-1.2, -0.4, 0.5};
+          obs.posture.head_yaw = 0.2;
+        }
+        // The bottom camera with the head pitched down, so the own feet show.
+        obs.posture.head_pitch = wide ? 0.1 : cam == NaoCamera::kTop ? 0.2 : 0.45;
+        world.setObserver(obs);
         const RenderOutput r = world.render(cam, width, height, true);
         writeGrayPng(name + ".png", r.gray.view());
         // Mean luma per object label, to compare grey levels with real frames.
@@ -81,7 +91,7 @@ int main(int argc, char** argv) {
           }
         }
         std::printf("  %s: none %.0f carpet %.0f line %.0f goal %.0f ball %.0f own %.0f robots %.0f\n",
-                    cam == NaoCamera::kTop ? "top" : "bottom", sum[0] / std::max(1.0, count[0]),
+                    wide ? "wide" : cam == NaoCamera::kTop ? "top" : "bottom", sum[0] / std::max(1.0, count[0]),
                     sum[1] / std::max(1.0, count[1]), sum[2] / std::max(1.0, count[2]),
                     sum[3] / std::max(1.0, count[3]), sum[4] / std::max(1.0, count[4]),
                     sum[5] / std::max(1.0, count[5]), sum[16] / std::max(1.0, count[16]));
