@@ -250,6 +250,38 @@ TEST(FieldLines, UprightWhitePartIsNotALine) {
   EXPECT_TRUE(not_on_ground);
 }
 
+TEST(FieldLines, BallIsNotAPenaltyMark) {
+  // The penalty mark scene, with a ball-like blob 0.6 m left of the mark.
+  const FieldPose pose = kScenes[1].pose;
+  const CameraModel cam = test::testCamera(kScenes[1].pitch_deg);
+  test::SyntheticScene scene = test::sceneFromField(FieldDimensions{}, pose);
+  scene.seed = 12;
+  GrayImage image = test::renderScene(cam, scene);
+  const Eigen::Vector2d mark = truthInRobot(pose).penalty_marks[1];
+  const Eigen::Vector2d ball = mark + Eigen::Vector2d(0, 0.6);
+  // Drawn flat on the ground (as the bottom camera sees a ball from above): a 10 cm white disc
+  // with two black patches, so that only its dark patches tell it from a painted cross.
+  const Eigen::Vector2d c = *cam.robotToPixel({ball.x(), ball.y(), 0});
+  for (int y = static_cast<int>(c.y()) - 40; y <= static_cast<int>(c.y()) + 40; ++y) {
+    for (int x = static_cast<int>(c.x()) - 40; x <= static_cast<int>(c.x()) + 40; ++x) {
+      const auto g = cam.pixelToGround({x + 0.5, y + 0.5});
+      if (!g || (*g - ball).norm() > 0.05) continue;
+      const Eigen::Vector2d d = *g - ball;
+      const bool patch = (d - Eigen::Vector2d(0.02, 0.015)).norm() < 0.018 ||
+                         (d - Eigen::Vector2d(-0.02, -0.02)).norm() < 0.018;
+      image.at(x, y) = patch ? 25 : 210;
+    }
+  }
+  const IgnoreMask mask = IgnoreMask::all(640, 480);
+  const FieldLineResult res = FieldLineDetector().run(image.view(), cam, mask);
+  ASSERT_EQ(res.features.penalty_marks.size(), 1u);
+  EXPECT_LE((res.features.penalty_marks[0].centre_in_robot - mark).norm(), 0.08);
+  // Without the dark-patch test the ball is taken for a second mark: the test is what rejects it.
+  FieldLineParams p;
+  p.penalty_mark_max_dark_fraction = 1.0;
+  EXPECT_EQ(FieldLineDetector(p).run(image.view(), cam, mask).features.penalty_marks.size(), 2u);
+}
+
 TEST(FieldLines, SameInputSameOutput) {
   const Detected a = detect(kScenes[0].pose, 22, 0.3, 5);
   const Detected b = detect(kScenes[0].pose, 22, 0.3, 5);

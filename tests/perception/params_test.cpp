@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string>
 
+#include "colorfree/perception/camera_model.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/field_lines.h"
 #include "colorfree/perception/high_contrast.h"
@@ -111,6 +112,19 @@ TEST(StageParams, ImpossibleCombinationsAreErrors) {
   EXPECT_THROW(FieldLineParams::load(writeTemp("widths.yaml", withValue(lines, "min_width_factor", "5.0"))), Error);
   const std::string body = readFile(defaultParamDir() + "/body_model.yaml");
   EXPECT_THROW(BodyModelParams::load(writeTemp("body.yaml", withValue(body, "chest_top_m", "0.10"))), Error);
+}
+
+TEST(CameraFile, DocumentedExampleLoadsAndSeesTheGroundAhead) {
+  const CameraModel cam = CameraModel::load(std::string(COLORFREE_SOURCE_DIR) + "/docs/camera_nao_top_example.yaml");
+  EXPECT_EQ(cam.width(), 640);
+  EXPECT_EQ(cam.height(), 480);
+  // The image centre looks at the ground 1 to 2 m ahead; the horizon is in the upper half.
+  const auto centre = cam.pixelToGround({320, 240});
+  ASSERT_TRUE(centre);
+  EXPECT_GT(centre->x(), 1.0);
+  EXPECT_LT(centre->x(), 2.0);
+  ASSERT_TRUE(cam.horizonY(320));
+  EXPECT_LT(*cam.horizonY(320), 240);
 }
 
 TEST(StageParams, PipelineConfigLoadsTheShippedDirectory) {

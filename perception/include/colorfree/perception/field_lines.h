@@ -64,6 +64,9 @@ struct FieldLineParams {
   double penalty_mark_clear_radius_m = 0.25;
   /// Farther away the scan lines are too sparse to tell a mark from a piece of line.
   double penalty_mark_max_distance_m = 3.5;
+  /// Share of the pixels within the mark's size that may be darker than the carpet around it by
+  /// min_spot_contrast (a ball's black patches are; a painted cross has none).
+  double penalty_mark_max_dark_fraction = 0.08;
   int min_penalty_mark_spots = 4;
 
   bool operator==(const FieldLineParams&) const = default;
