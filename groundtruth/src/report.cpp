@@ -205,8 +205,9 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
   row2("precision", "precision", rd, bd, "&ndash;", "&ndash;");
   row2("position error on the field, mean (m)", "position_error_m", rd, bd, "&ndash;", "&ndash;");
   row2("position error on the field, RMS (m)", "position_error_rms_m", rd, bd, "&ndash;", "&ndash;");
-  h << "<tr><td>true objects that should be detected</td><td>" << at(r, "robot.counts.truths") << "</td><td class=paper>"
-    << "</td><td>" << at(r, "ball.counts.truths") << "</td><td class=paper>~600 frames</td></tr></table>";
+  h << "<tr><td>object-frames that should be detected</td><td>" << at(r, "robot.counts.should_detect")
+    << "</td><td class=paper></td><td>" << at(r, "ball.counts.should_detect")
+    << "</td><td class=paper>~600 frames</td></tr></table>";
 
   // Orientation.
   const json& o = at(r, "orientation");

@@ -22,6 +22,7 @@ struct ObjectTally {
   long proposal_frames = 0, proposals = 0, proposal_truths = 0, proposal_hits = 0;
   long detector_frames = 0, percepts = 0, truths = 0, detected = 0, false_positives = 0;
   long true_positives = 0;
+  long should_detect = 0;  // whether or not a detector ran
   long position_errors = 0;
   double position_error_sum = 0, position_error_sq = 0;
 };
@@ -77,6 +78,7 @@ json objectJson(const ObjectTally& t) {
                  {"proposal_truths", t.proposal_truths}, {"proposal_hits", t.proposal_hits},
                  {"detector_frames", t.detector_frames}, {"percepts", t.percepts},
                  {"truths", t.truths}, {"detected", t.detected},
+                 {"should_detect", t.should_detect},
                  {"true_positives", t.true_positives}, {"false_positives", t.false_positives}};
   return j;
 }
@@ -329,7 +331,10 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     o.radius_px = b.radius_px;
     return o;
   };
-  for (const auto& b : balls) frame_overlays.push_back(ballOverlay(b));
+  for (const auto& b : balls) {
+    frame_overlays.push_back(ballOverlay(b));
+    if (b.should_detect) for (Tally* t : tallies) ++t->ball.should_detect;
+  }
   if (pc.ball_proposals) {
     for (Tally* t : tallies) {
       ++t->ball.proposal_frames;
@@ -443,7 +448,10 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     o.label += robotSideName(r.side_seen);
     return o;
   };
-  for (const auto* r : robots) frame_overlays.push_back(robotOverlay(*r));
+  for (const auto* r : robots) {
+    frame_overlays.push_back(robotOverlay(*r));
+    if (r->should_detect) for (Tally* t : tallies) ++t->robot.should_detect;
+  }
   if (pc.robot_proposals) {
     for (Tally* t : tallies) {
       ++t->robot.proposal_frames;

@@ -132,6 +132,9 @@ TEST(Scorer, AbsentStagesStayAbsent) {
   }
   EXPECT_TRUE(r["cnn"]["BallNet"]["accuracy"].is_null());
   EXPECT_EQ(r["frame_count"], 1);
+  // What should have been detected is counted even without a detector.
+  EXPECT_EQ(r["ball"]["counts"]["should_detect"], 1);
+  EXPECT_EQ(r["ball"]["counts"]["truths"], 0);
 }
 
 TEST(Scorer, BallMetricsOnHandMadeFrames) {
