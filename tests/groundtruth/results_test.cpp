@@ -44,7 +44,8 @@ TEST(Expectations, ParseAndCheck) {
   EXPECT_DOUBLE_EQ(e.bound, 0.97);
   EXPECT_THROW(parseExpectation("ball.detection_rate about 0.97", "s.yaml"), Error);
   EXPECT_THROW(parseExpectation(">= 0.97", "s.yaml"), Error);
-  const json r = {{"ball", {{"detection_rate", 0.95}}}, {"field_features", {{"pose_error_mm", nullptr}}}};
+  const json r = {{"ball", {{"detection_rate", 0.95}}},
+                  {"field_features", {{"pose_error_mm", nullptr}}}};
   auto f = checkExpectations({e}, r);
   ASSERT_EQ(f.size(), 1u);
   const std::string msg = f[0].message("game");
@@ -63,16 +64,17 @@ TEST(Expectations, ParseAndCheck) {
 
 TEST(Expectations, UnknownMetricIsAnErrorBeforeRunning) {
   const auto& known = knownMetricNames();
-  for (const char* k : {"ball.detection_rate", "ball.proposal_recall", "ball.proposals_per_frame",
-                        "ball.false_positives_per_frame", "robot.detection_rate",
-                        "robot.proposal_recall", "robot.proposals_per_frame",
-                        "robot.false_positives_per_frame", "orientation.perceived",
-                        "orientation.semi_perceived", "orientation.not_perceived",
-                        "orientation.false_positive", "field_features.pose_error_mm",
-                        "timing_ms.ball_detector.mean", "timing_ms.high_contrast.max"}) {
+  for (const char* k :
+       {"ball.detection_rate", "ball.proposal_recall", "ball.proposals_per_frame",
+        "ball.false_positives_per_frame", "robot.detection_rate", "robot.proposal_recall",
+        "robot.proposals_per_frame", "robot.false_positives_per_frame", "orientation.perceived",
+        "orientation.semi_perceived", "orientation.not_perceived", "orientation.false_positive",
+        "field_features.pose_error_mm", "timing_ms.ball_detector.mean",
+        "timing_ms.high_contrast.max"}) {
     EXPECT_TRUE(known.count(k)) << k;
   }
-  EXPECT_NO_THROW(validateExpectations({parseExpectation("robot.detection_rate >= 0.9", "s")}, "s.yaml"));
+  EXPECT_NO_THROW(
+      validateExpectations({parseExpectation("robot.detection_rate >= 0.9", "s")}, "s.yaml"));
   try {
     validateExpectations({parseExpectation("ball.detecton_rate >= 0.9", "s")}, "scenes/x.yaml");
     FAIL();
@@ -103,14 +105,66 @@ TEST(Report, SaysAbsentAndShowsThePapersNumbers) {
   const std::string html = renderReportHtml(s.results({"demo", 3, "v"}), s.gallery(),
                                             {{"ball.detection_rate >= 0.97", false, "n/a"}});
   EXPECT_NE(html.find("absent"), std::string::npos);
-  EXPECT_NE(html.find("0.949"), std::string::npos);   // robot detection, paper
-  EXPECT_NE(html.find("40.07"), std::string::npos);   // pose error, paper
-  EXPECT_NE(html.find("6.959"), std::string::npos);   // ball detector max ms, paper
+  EXPECT_NE(html.find("0.949"), std::string::npos);  // robot detection, paper
+  EXPECT_NE(html.find("40.07"), std::string::npos);  // pose error, paper
+  EXPECT_NE(html.find("6.959"), std::string::npos);  // ball detector max ms, paper
   EXPECT_NE(html.find("NOT MET"), std::string::npos);
   // Self-contained: nothing fetched from elsewhere.
   EXPECT_EQ(html.find("src='http"), std::string::npos);
   EXPECT_EQ(html.find("<script src"), std::string::npos);
   EXPECT_EQ(html.find("<link"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace colorfree
+
+namespace colorfree {
+namespace {
+
+TEST(Report, ChartsAndGalleryFromHandMadeFrames) {
+  ScoringParams params;
+  params.orientation_heading_bin_deg = 90;
+  Scorer s(params, FieldDimensions{});
+  GrayImage image(320, 240, 70);
+  for (int y = 90; y < 110; ++y)
+    for (int x = 90; x < 110; ++x) image.at(x, y) = 230;
+  for (double light : {0.3, 1.0}) {
+    s.beginCase({light < 0.5 ? "dim" : "bright", {{"lighting.scale", light}}, {}});
+    for (int i = 0; i < 4; ++i) {
+      FrameTruth t;
+      t.frame_index = i;
+      t.ball_present = true;
+      t.ball.in_view = t.ball.should_detect = true;
+      t.ball.centre_px = {100, 100};
+      t.ball.radius_px = 10;
+      t.ball.visible_fraction = 1;
+      RobotInImage r;
+      r.in_view = r.should_detect = true;
+      r.box = {200, 40, 240, 120};
+      r.heading_rel_rad = (i % 4) * 3.14159265358979 / 2;
+      r.heading_in_observer_rad = r.heading_rel_rad;
+      t.robots = {r};
+      FramePercepts p;
+      p.ball_proposals = {BallProposal{{100, 100}, 10, 1}};
+      p.balls = std::vector<BallPercept>{};
+      if (light > 0.5 || i == 0) p.balls->push_back(BallPercept{{101, 100}, 10, 0.9, {}});
+      if (i == 3) p.balls->push_back(BallPercept{{40, 200}, 8, 0.7, {}});
+      p.robots = {RobotPercept{}};
+      p.robots->at(0).box = r.box;
+      p.robots->at(0).orientation_raw =
+          RobotOrientation{r.heading_in_observer_rad + (i == 1 ? 1.0 : 0.0), true};
+      p.orientation_stage = true;
+      s.addFrame(t, p, nullptr, &image);
+    }
+  }
+  const std::string html = renderReportHtml(s.results({"demo", 1, "v"}), s.gallery(), {});
+  EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  EXPECT_NE(html.find("Detection rate against lighting.scale"), std::string::npos);
+  EXPECT_NE(html.find("Orientation classes per true heading, raw"), std::string::npos);
+  EXPECT_NE(html.find("Missed balls"), std::string::npos);
+  EXPECT_NE(html.find("False balls"), std::string::npos);
+  EXPECT_NE(html.find("Orientation false positives"), std::string::npos);
+  std::ofstream(::testing::TempDir() + "/report_demo.html") << html;
 }
 
 }  // namespace

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "colorfree/groundtruth/field_model.h"
+#include "colorfree/groundtruth/field_markings.h"
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/groundtruth/truth_in_image.h"
 #include "colorfree/groundtruth/world_state.h"
@@ -71,7 +71,8 @@ struct RunInfo {
 
 /// A picture for the report: a PNG as base64, with a caption.
 struct GalleryItem {
-  std::string kind;  ///< missed_ball, false_ball, missed_robot, false_robot, orientation, worst_frame
+  std::string
+      kind;  ///< missed_ball, false_ball, missed_robot, false_robot, orientation, worst_frame
   std::string caption;
   double severity = 0;
   int frame = 0;
@@ -111,7 +112,7 @@ class Scorer {
   struct State;
   ScoringParams params_;
   FieldDimensions dims_;
-  FieldModel field_;
+  FieldMarkings field_;
   std::unique_ptr<State> state_;
 };
 

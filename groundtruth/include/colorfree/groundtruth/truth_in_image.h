@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "colorfree/groundtruth/field_model.h"
+#include "colorfree/groundtruth/field_markings.h"
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/groundtruth/world_state.h"
 #include "colorfree/perception/percepts.h"
@@ -43,7 +43,7 @@ class FrameProjector {
 
 /// The true ball as the camera sees it.
 struct BallInImage {
-  bool in_view = false;          ///< in front of the camera and part of it inside the image
+  bool in_view = false;  ///< in front of the camera and part of it inside the image
   Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();  ///< centre of the projected outline
   double radius_px = 0;          ///< smallest circle about centre_px covering the outline
   double projected_area_px = 0;  ///< area of the whole projected outline (also outside the image)
@@ -67,8 +67,8 @@ struct RobotInImage {
   int visible_px = 0;            ///< this robot's pixels in the object map
   int occluded_px = 0;           ///< hull pixels showing a nearer object
   double visible_fraction = 0;
-  double distance_m = 0;         ///< on the ground, from the observer
-  double heading_rel_rad = 0;    ///< facing relative to the line of sight; 0 = facing the camera
+  double distance_m = 0;       ///< on the ground, from the observer
+  double heading_rel_rad = 0;  ///< facing relative to the line of sight; 0 = facing the camera
   RobotSide side_seen = RobotSide::kFront;
   double heading_in_observer_rad = 0;  ///< facing in the observer's robot frame
   Eigen::Vector2d position_in_field = Eigen::Vector2d::Zero();
@@ -111,7 +111,7 @@ struct FrameTruth {
 
 /// Computes the truth in the image from a world state. The object map may be empty: then
 /// visibility counts only the image border (and the visible fractions assume no occlusion).
-FrameTruth computeFrameTruth(const WorldState& world, const FieldModel& field,
+FrameTruth computeFrameTruth(const WorldState& world, const FieldMarkings& field,
                              const FieldDimensions& dims, const ScoringParams& params);
 
 /// Angle wrapped into (-π, π].
