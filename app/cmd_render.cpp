@@ -11,35 +11,10 @@
 #include "colorfree/sim/scenario.h"
 #include "colorfree/sim/world_renderer.h"
 #include "commands.h"
+#include "progress_bar.h"
 
 namespace colorfree::app {
 namespace {
-
-// A one-line progress bar on stderr, redrawn in place.
-class ProgressBar {
- public:
-  explicit ProgressBar(bool enabled)
-      : enabled_(enabled), start_(std::chrono::steady_clock::now()) {}
-  void update(int done, int total, const std::string& label) {
-    if (!enabled_) return;
-    constexpr int kWidth = 30;
-    const int filled = total > 0 ? done * kWidth / total : kWidth;
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const double rate = seconds > 0 ? done / seconds : 0;
-    const double eta = rate > 0 ? (total - done) / rate : 0;
-    std::fprintf(stderr, "\r[%s%s] %d/%d frames  %s  %.1f fps  %.0f s left ",
-                 std::string(static_cast<std::size_t>(filled), '#').c_str(),
-                 std::string(static_cast<std::size_t>(kWidth - filled), ' ').c_str(), done, total,
-                 label.c_str(), rate, eta);
-    if (done == total) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
-  }
-
- private:
-  bool enabled_;
-  std::chrono::steady_clock::time_point start_;
-};
 
 // Ctrl-C stops after the frame being rendered; the partial output is then removed.
 std::atomic<bool> g_interrupted{false};
@@ -74,7 +49,7 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
     if (args->frames != 0) options.frames = args->frames;
     options.object_maps = args->object_maps;
     sim::ScenarioRunner runner(std::move(scenario), sim::worldRendererFactory());
-    ProgressBar bar(!args->quiet && ::isatty(STDERR_FILENO));
+    RunProgressBar bar(!args->quiet && ::isatty(STDERR_FILENO));
     g_interrupted = false;
     std::signal(SIGINT, onInterrupt);
     std::signal(SIGTERM, onInterrupt);

@@ -6,7 +6,8 @@
 
 namespace colorfree::app {
 
-/// A one-line progress bar on stderr, redrawn in place; silent when not enabled (no terminal).
+/// A one-line progress bar on stderr for render and run, redrawn in place; silent when not enabled
+/// (no terminal).
 class RunProgressBar {
  public:
   explicit RunProgressBar(bool enabled)

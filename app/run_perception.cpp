@@ -1,6 +1,5 @@
 #include "run_perception.h"
 
-#include "pose_fit_adapter.h"
 
 namespace colorfree::app {
 
@@ -26,7 +25,9 @@ std::string stageKey(Stage stage) {
   return "unknown";
 }
 
-PerceptionRunner::PerceptionRunner() : pipeline_(PipelineConfig::loadDefault()) {}
+PerceptionRunner::PerceptionRunner()
+    : pipeline_(PipelineConfig::loadDefault()),
+      pose_fitter_(PoseFitParams::loadDefault(), FieldDimensions::loadDefault()) {}
 
 FramePercepts PerceptionRunner::process(const GrayImage& image, const CameraModel& camera,
                                         const FieldPose& pose_guess) {
@@ -49,10 +50,8 @@ FramePercepts PerceptionRunner::process(const GrayImage& image, const CameraMode
   if (frame.field_lines) {
     p.field_features = frame.field_lines->features;
     p.pose_fit_stage = true;
-    if (const auto fit = fitPose(frame.field_lines->features,
-                                 {pose_guess.x_m, pose_guess.y_m, pose_guess.heading_rad})) {
-      p.pose_in_field = FieldPose{fit->x_m, fit->y_m, fit->heading_rad};
-    }
+    const PoseFitResult fit = pose_fitter_.fit(frame.field_lines->features, pose_guess);
+    if (fit.ok) p.pose_in_field = fit.pose;
   }
   return p;
 }

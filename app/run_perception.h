@@ -5,6 +5,7 @@
 #include "colorfree/perception/camera_model.h"
 #include "colorfree/perception/image.h"
 #include "colorfree/perception/pipeline.h"
+#include "colorfree/perception/pose_fit.h"
 
 namespace colorfree::app {
 
@@ -22,6 +23,7 @@ class PerceptionRunner {
 
  private:
   Pipeline pipeline_;
+  PoseFitter pose_fitter_;
   PipelineStats stats_;
 };
 

@@ -7,11 +7,6 @@
 
 namespace colorfree {
 
-Eigen::Vector2d FieldPose::toField(const Eigen::Vector2d& p) const {
-  const double c = std::cos(theta_rad), s = std::sin(theta_rad);
-  return {x_m + c * p.x() - s * p.y(), y_m + s * p.x() + c * p.y()};
-}
-
 FieldModel::FieldModel(const FieldDimensions& f) {
   const double hl = f.halfLength(), hw = f.halfWidth();
   const double pa_x = hl - f.penalty_area_length_m, pa_y = f.penalty_area_width_m / 2;
@@ -101,7 +96,7 @@ PoseFitResult PoseFitter::fit(const FieldFeatures& features, const FieldPose& gu
   PoseFitResult result;
   FieldPose pose = guess;
   for (int it = 0; it < p.iterations; ++it) {
-    const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
+    const double c = std::cos(pose.heading_rad), s = std::sin(pose.heading_rad);
     // d(field point)/dθ for a robot-frame point.
     const auto dRotated = [&](const Eigen::Vector2d& q) {
       return Eigen::Vector2d(-s * q.x() - c * q.y(), c * q.x() - s * q.y());
@@ -180,7 +175,7 @@ PoseFitResult PoseFitter::fit(const FieldFeatures& features, const FieldPose& gu
     const Eigen::Vector3d step = -n.h.ldlt().solve(n.g);
     pose.x_m += step.x();
     pose.y_m += step.y();
-    pose.theta_rad = std::remainder(pose.theta_rad + step.z(), 2 * 3.14159265358979323846);
+    pose.heading_rad = std::remainder(pose.heading_rad + step.z(), 2 * 3.14159265358979323846);
     result.ok = true;
     if (step.head<2>().norm() < p.converged_step_m && std::abs(step.z()) < p.converged_step_m) break;
   }

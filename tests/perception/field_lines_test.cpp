@@ -28,7 +28,7 @@ struct Truth {
 
 Truth truthInRobot(const FieldPose& pose) {
   const FieldModel model(FieldDimensions{});
-  const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
+  const double c = std::cos(pose.heading_rad), s = std::sin(pose.heading_rad);
   const auto toRobot = [&](const Eigen::Vector2d& p) {
     const Eigen::Vector2d d = p - Eigen::Vector2d(pose.x_m, pose.y_m);
     return Eigen::Vector2d(c * d.x() + s * d.y(), -s * d.x() + c * d.y());

@@ -15,7 +15,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector2d fieldToRobot(const FieldPose& pose, const Eigen::Vector2d& p) {
-  const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
+  const double c = std::cos(pose.heading_rad), s = std::sin(pose.heading_rad);
   const Eigen::Vector2d d = p - Eigen::Vector2d(pose.x_m, pose.y_m);
   return {c * d.x() + s * d.y(), -s * d.x() + c * d.y()};
 }
@@ -83,11 +83,11 @@ TEST(PoseFit, RecoversThePoseFromExactFeatures) {
   for (const FieldPose truth : {FieldPose{-1.2, 0.4, 0.3}, FieldPose{3.0, -1.0, -2.0}, FieldPose{-3.9, 2.5, 2.8}}) {
     const FieldFeatures f = featuresFromModel(truth, 2.5, 0, 1);
     ASSERT_GE(f.lines.size(), 2u);
-    const FieldPose guess{truth.x_m + 0.25, truth.y_m - 0.2, truth.theta_rad + 0.1};
+    const FieldPose guess{truth.x_m + 0.25, truth.y_m - 0.2, truth.heading_rad + 0.1};
     const PoseFitResult r = fitter.fit(f, guess);
     EXPECT_TRUE(r.ok);
     EXPECT_LT(positionError(r.pose, truth), 1e-6) << r.pose.x_m << " " << r.pose.y_m;
-    EXPECT_NEAR(std::remainder(r.pose.theta_rad - truth.theta_rad, 2 * kPi), 0, 1e-6);
+    EXPECT_NEAR(std::remainder(r.pose.heading_rad - truth.heading_rad, 2 * kPi), 0, 1e-6);
     EXPECT_LT(r.rms_residual_m, 1e-6);
     // The guess was wrong: the fit moved.
     EXPECT_GT(positionError(guess, truth), 0.3);
@@ -103,7 +103,7 @@ TEST(PoseFit, NoisyFeaturesGiveACentimetreError) {
   for (int i = 0; i < 40; ++i) {
     const FieldPose truth{ux(rng), uy(rng), ut(rng)};
     const FieldFeatures f = featuresFromModel(truth, 3.0, 0.02, 100 + i);
-    const PoseFitResult r = fitter.fit(f, {truth.x_m + off(rng), truth.y_m + off(rng), truth.theta_rad + off(rng) / 2});
+    const PoseFitResult r = fitter.fit(f, {truth.x_m + off(rng), truth.y_m + off(rng), truth.heading_rad + off(rng) / 2});
     if (!r.ok) continue;
     sum += positionError(r.pose, truth);
     ++n;
@@ -133,10 +133,10 @@ TEST(PoseFit, FromDetectedFeaturesOfASyntheticFrame) {
   const IgnoreMask mask = IgnoreMask::combine(FieldBoundaryDetector().run(image.view(), cam),
                                               BodyContourProvider().run(cam), 640, 480);
   const FieldLineResult detected = FieldLineDetector().run(image.view(), cam, mask);
-  const PoseFitResult r = PoseFitter().fit(detected.features, {truth.x_m + 0.2, truth.y_m - 0.15, truth.theta_rad + 0.05});
+  const PoseFitResult r = PoseFitter().fit(detected.features, {truth.x_m + 0.2, truth.y_m - 0.15, truth.heading_rad + 0.05});
   ASSERT_TRUE(r.ok);
   EXPECT_LT(positionError(r.pose, truth), 0.04);
-  EXPECT_NEAR(r.pose.theta_rad, truth.theta_rad, 0.02);
+  EXPECT_NEAR(r.pose.heading_rad, truth.heading_rad, 0.02);
 }
 
 }  // namespace

@@ -41,7 +41,7 @@ struct SyntheticScene {
 // The field's markings seen from a robot at `pose`, in its robot frame.
 inline SyntheticScene sceneFromField(const FieldDimensions& field, const FieldPose& pose) {
   const FieldModel model(field);
-  const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
+  const double c = std::cos(pose.heading_rad), s = std::sin(pose.heading_rad);
   const auto toRobot = [&](const Eigen::Vector2d& p) {
     const Eigen::Vector2d d = p - Eigen::Vector2d(pose.x_m, pose.y_m);
     return Eigen::Vector2d(c * d.x() + s * d.y(), -s * d.x() + c * d.y());

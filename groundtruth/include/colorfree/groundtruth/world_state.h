@@ -6,16 +6,9 @@
 #include <vector>
 
 #include "colorfree/perception/camera_model.h"
+#include "colorfree/perception/field_pose.h"
 
 namespace colorfree {
-
-/// A pose on the field: position of the robot's ground point (between its feet, under the torso)
-/// and the direction it faces, field coordinates (see FieldDimensions).
-struct FieldPose {
-  double x_m = 0;
-  double y_m = 0;
-  double heading_rad = 0;
-};
 
 /// What each pixel of the object map shows. Robots are kObjectRobotBase + index into
 /// WorldState::robots; the observer's own body has its own label.

@@ -5,19 +5,10 @@
 #include <vector>
 
 #include "colorfree/perception/field_dimensions.h"
+#include "colorfree/perception/field_pose.h"
 #include "colorfree/perception/percepts.h"
 
 namespace colorfree {
-
-/// A robot's pose on the field: position (metres, field frame) and heading (radians).
-struct FieldPose {
-  double x_m = 0;
-  double y_m = 0;
-  double theta_rad = 0;
-
-  /// A robot-frame point in the field frame.
-  Eigen::Vector2d toField(const Eigen::Vector2d& point_in_robot) const;
-};
 
 /// The field's markings in field coordinates, built from FieldDimensions only.
 struct FieldModel {
