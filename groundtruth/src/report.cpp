@@ -264,11 +264,17 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
       {"ball_detector", {"Ball detector", {2.452, 6.959}}}};
   h << "<h2>Profiling (paper's Table 3; ours on this machine, paper's on a NAO V5)</h2><table><tr><th>module</th>"
        "<th>avg. ms, ours</th><th>max. ms, ours</th><th class=paper>avg. ms, paper</th><th class=paper>max. ms, paper</th></tr>";
+  // The paper's rows in its order, then any other stage the pipeline timed.
+  std::vector<std::string> stage_order = paperStageNames();
   for (auto it = at(r, "timing_ms").begin(); it != at(r, "timing_ms").end(); ++it) {
-    const auto p = kPaperStages.find(it.key());
-    const bool present = it.value()["mean"].is_number();
-    h << "<tr><td>" << (p != kPaperStages.end() ? p->second.first + " (<code>" + it.key() + "</code>)" : "<code>" + esc(it.key()) + "</code>")
-      << "</td><td>" << cell(it.value()["mean"], present, 3) << "</td><td>" << cell(it.value()["max"], present, 3)
+    if (std::find(stage_order.begin(), stage_order.end(), it.key()) == stage_order.end()) stage_order.push_back(it.key());
+  }
+  for (const auto& key : stage_order) {
+    const json& t = at(r, "timing_ms")[key];
+    const auto p = kPaperStages.find(key);
+    const bool present = t.is_object() && t["mean"].is_number();
+    h << "<tr><td>" << (p != kPaperStages.end() ? p->second.first + " (<code>" + key + "</code>)" : "<code>" + esc(key) + "</code>")
+      << "</td><td>" << cell(present ? t["mean"] : json(), present, 3) << "</td><td>" << cell(present ? t["max"] : json(), present, 3)
       << "</td><td class=paper>" << (p != kPaperStages.end() ? num(p->second.second.first, 3) : "&ndash;")
       << "</td><td class=paper>" << (p != kPaperStages.end() ? num(p->second.second.second, 3) : "&ndash;") << "</td></tr>";
   }
@@ -309,7 +315,7 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
     }
     if (values.size() < 2) continue;
     // Cases that share a value of this setting are pooled by their counts.
-    std::map<double, std::array<long, 4>> pooled;
+    std::map<double, std::array<long, 8>> pooled;
     for (const auto& c : cases) {
       if (!c["settings"].contains(key)) continue;
       auto& a = pooled[c["settings"][key].get<double>()];
@@ -317,13 +323,24 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
       a[1] += c["ball"]["counts"]["truths"].get<long>();
       a[2] += c["robot"]["counts"]["detected"].get<long>();
       a[3] += c["robot"]["counts"]["truths"].get<long>();
+      const json& fc = c["field_features"]["counts"];
+      a[4] += fc["lines_detected"].get<long>();
+      a[5] += fc["lines_in_view"].get<long>();
+      a[6] += fc["intersections_detected"].get<long>();
+      a[7] += fc["intersections_in_view"].get<long>();
     }
     Series ball{"ball", "#1f6fd1", {}}, robot{"robot", "#d6453d", {}};
+    Series lines{"field lines", "#2e9d4a", {}}, crossings{"L/T/X", "#8e44ad", {}};
+    auto ratio = [](bool present, long num, long den) {
+      return present && den > 0 ? json(static_cast<double>(num) / den) : json(nullptr);
+    };
     for (const auto& [v, a] : pooled) {
-      ball.points.push_back({v, bd && a[1] > 0 ? json(static_cast<double>(a[0]) / a[1]) : json(nullptr)});
-      robot.points.push_back({v, rd && a[3] > 0 ? json(static_cast<double>(a[2]) / a[3]) : json(nullptr)});
+      ball.points.push_back({v, ratio(bd, a[0], a[1])});
+      robot.points.push_back({v, ratio(rd, a[2], a[3])});
+      lines.points.push_back({v, ratio(ffr, a[4], a[5])});
+      crossings.points.push_back({v, ratio(ffr, a[6], a[7])});
     }
-    h << lineChart("Detection rate against " + key, key, {ball, robot});
+    h << lineChart("Detection rate against " + key, key, {ball, robot, lines, crossings});
     any_chart = true;
   }
   Series bdist{"ball", "#1f6fd1", {}}, rdist{"robot", "#d6453d", {}};
@@ -367,7 +384,9 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
   static const std::vector<std::pair<std::string, std::string>> kKinds = {
       {"worst_frame", "Worst frames"}, {"missed_ball", "Missed balls (most visible first)"},
       {"false_ball", "False balls (most confident first)"}, {"missed_robot", "Missed robots (most visible first)"},
-      {"false_robot", "False robots (most confident first)"}, {"orientation", "Orientation false positives"}};
+      {"false_robot", "False robots (most confident first)"}, {"orientation", "Orientation false positives"},
+      {"missed_intersection", "Missed L/T/X intersections (first seen)"},
+      {"false_intersection", "False L/T/X intersections (first seen)"}};
   bool any = false;
   for (const auto& [kind, title] : kKinds) {
     std::vector<const GalleryItem*> items;

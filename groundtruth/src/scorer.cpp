@@ -178,10 +178,13 @@ json paramsJson(const ScoringParams& p) {
           {"robot_match_max_feet_distance_m", p.robot_match_max_feet_distance_m},
           {"orientation_tolerance_deg", p.orientation_tolerance_deg},
           {"orientation_heading_bin_deg", p.orientation_heading_bin_deg},
+          {"field_feature_max_distance_m", p.field_feature_max_distance_m},
           {"line_min_length_px", p.line_min_length_px},
           {"line_match_max_px", p.line_match_max_px},
           {"intersection_match_max_px", p.intersection_match_max_px},
           {"feature_visibility_window_px", p.feature_visibility_window_px},
+          {"pose_guess_offset_m", p.pose_guess_offset_m},
+          {"pose_guess_offset_deg", p.pose_guess_offset_deg},
           {"distance_bin_m", p.distance_bin_m}};
 }
 
@@ -264,7 +267,7 @@ struct Scorer::State {
 };
 
 Scorer::Scorer(ScoringParams params, FieldDimensions dims)
-    : params_(params), dims_(dims), field_(FieldModel::fromDimensions(dims)),
+    : params_(params), dims_(dims), field_(FieldMarkings::fromDimensions(dims)),
       state_(std::make_unique<State>()) {}
 Scorer::~Scorer() = default;
 Scorer::Scorer(Scorer&&) noexcept = default;
@@ -300,6 +303,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
   };
   auto distanceBin = [&](double d) { return static_cast<int>(std::floor(d / p.distance_bin_m)); };
   std::vector<Tally*> tallies = {&state_->total, &case_tally};
+  const std::string where =
+      state_->cases.back().first.name + " frame " + std::to_string(truth.frame_index);
   for (Tally* t : tallies) ++t->frames;
 
   // Events for the gallery: (kind, severity, region, overlays, caption).
@@ -397,7 +402,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
                           {b.centre_px.x() - b.radius_px, b.centre_px.y() - b.radius_px,
                            b.centre_px.x() + b.radius_px, b.centre_px.y() + b.radius_px},
                           ov,
-                          "frame " + std::to_string(truth.frame_index) + ": missed ball, r " +
+                          where + ": missed ball, r " +
                               fmt(b.radius_px, 1) + " px, " + fmt(b.distance_m) + " m, visible " +
                               fmt(100 * b.visible_fraction, 0) + " %"});
       }
@@ -418,7 +423,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
                         {q.centre_px.x() - q.radius_px, q.centre_px.y() - q.radius_px,
                          q.centre_px.x() + q.radius_px, q.centre_px.y() + q.radius_px},
                         {o},
-                        "frame " + std::to_string(truth.frame_index) + ": false ball, confidence " +
+                        where + ": false ball, confidence " +
                             fmt(q.confidence)});
     }
   }
@@ -526,7 +531,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
           }
         }
         events.push_back({"missed_robot", r.visible_fraction, r.box, ov,
-                          "frame " + std::to_string(truth.frame_index) + ": missed robot " +
+                          where + ": missed robot " +
                               std::to_string(r.index) + ", " + fmt(r.distance_m) + " m, visible " +
                               fmt(100 * r.visible_fraction, 0) + " %"});
       } else if (pc.orientation_stage && raw == OrientationClass::kFalsePositive) {
@@ -535,7 +540,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
         o.box = percepts[pi].box;
         o.label = "est " + fmt(percepts[pi].orientation_raw->angle_rad / kDeg, 0) + " deg";
         events.push_back({"orientation", 1.0, r.box, {robotOverlay(r), o},
-                          "frame " + std::to_string(truth.frame_index) + ": orientation false positive, true " +
+                          where + ": orientation false positive, true " +
                               fmt(r.heading_in_observer_rad / kDeg, 0) + " deg (observer frame), " +
                               fmt(rel_deg, 0) + " deg to the line of sight"});
       }
@@ -549,7 +554,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       for (Tally* t : tallies) ++t->robot.false_positives;
       ++frame_errors;
       events.push_back({"false_robot", percepts[pi].confidence, percepts[pi].box, {o},
-                        "frame " + std::to_string(truth.frame_index) + ": false robot, confidence " +
+                        where + ": false robot, confidence " +
                             fmt(percepts[pi].confidence)});
     }
   }
@@ -590,6 +595,38 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     }
     const Matching mm = matchOneToOne(static_cast<int>(fi.penalty_marks.size()),
                                       static_cast<int>(ff.penalty_marks.size()), mark_cands);
+    auto cross = [](const Eigen::Vector2d& at, Overlay::Role role, IntersectionType type) {
+      Overlay o;
+      o.shape = Overlay::Shape::kCross;
+      o.role = role;
+      o.a = at;
+      o.label = intersectionTypeName(type);
+      return o;
+    };
+    const double pad = 3 * p.intersection_match_max_px;
+    for (std::size_t ti = 0; ti < fi.intersections.size(); ++ti) {
+      if (mi.truth_to_percept[ti] >= 0) continue;
+      const auto& x = fi.intersections[ti];
+      std::vector<Overlay> ov = {cross(x.position_px, Overlay::Role::kTruth, x.type)};
+      for (const auto& q : ff.intersections) {
+        if ((q.position_px - x.position_px).norm() < pad) ov.push_back(cross(q.position_px, Overlay::Role::kPercept, q.type));
+      }
+      events.push_back({"missed_intersection", 0.0,
+                        {x.position_px.x() - pad, x.position_px.y() - pad, x.position_px.x() + pad, x.position_px.y() + pad},
+                        ov, where + ": missed " + intersectionTypeName(x.type) + " at field (" +
+                            fmt(x.position_in_field.x()) + ", " + fmt(x.position_in_field.y()) + ")"});
+    }
+    for (std::size_t pi = 0; pi < ff.intersections.size(); ++pi) {
+      if (mi.percept_to_truth[pi] >= 0) continue;
+      const auto& q = ff.intersections[pi];
+      std::vector<Overlay> ov = {cross(q.position_px, Overlay::Role::kPercept, q.type)};
+      for (const auto& x : fi.intersections) {
+        if ((q.position_px - x.position_px).norm() < pad) ov.push_back(cross(x.position_px, Overlay::Role::kTruth, x.type));
+      }
+      events.push_back({"false_intersection", 0.0,
+                        {q.position_px.x() - pad, q.position_px.y() - pad, q.position_px.x() + pad, q.position_px.y() + pad},
+                        ov, where + ": false " + intersectionTypeName(q.type)});
+    }
     const bool circle_hit = fi.centre_circle_in_view && ff.centre_circle && fi.circle_centre_px &&
                             (ff.centre_circle->centre_px - *fi.circle_centre_px).norm() <=
                                 p.intersection_match_max_px;
@@ -678,7 +715,7 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
   if (frame_errors > 0) {
     offer("worst_frame", frame_errors, p.gallery_worst_frames, [&] {
       GalleryItem g;
-      g.caption = "frame " + std::to_string(truth.frame_index) + ": " + std::to_string(frame_errors) +
+      g.caption = where + ": " + std::to_string(frame_errors) +
                   " misses and false detections (green truth, red percepts)";
       g.png_base64 = cropPngBase64(*image, {0, 0, static_cast<double>(image->width()), static_cast<double>(image->height())},
                                    frame_overlays, std::max(image->width(), kFrameThumbWidthPx));

@@ -26,11 +26,14 @@ ScoringParams ScoringParams::load(const std::string& path) {
   p.robot_match_max_feet_distance_m = f.getInRange("robot_match_max_feet_distance_m", 0, 10);
   p.orientation_tolerance_deg = f.getInRange("orientation_tolerance_deg", 0.1, 90);
   p.orientation_heading_bin_deg = f.getInRange("orientation_heading_bin_deg", 1, 360);
+  p.field_feature_max_distance_m = f.getInRange("field_feature_max_distance_m", 0.1, 100);
   p.line_min_length_px = f.getInRange("line_min_length_px", 1, 10000);
   p.line_match_max_px = f.getInRange("line_match_max_px", 0.1, 1000);
   p.intersection_match_max_px = f.getInRange("intersection_match_max_px", 0.1, 1000);
   p.feature_visibility_window_px =
       static_cast<int>(f.getInRange("feature_visibility_window_px", 0, 100));
+  p.pose_guess_offset_m = f.getInRange("pose_guess_offset_m", 0, 5);
+  p.pose_guess_offset_deg = f.getInRange("pose_guess_offset_deg", -90, 90);
   p.distance_bin_m = f.getInRange("distance_bin_m", 0.05, 100);
   p.gallery_max_crops = static_cast<int>(f.getInRange("gallery_max_crops", 0, 1000));
   p.gallery_worst_frames = static_cast<int>(f.getInRange("gallery_worst_frames", 0, 1000));
@@ -75,7 +78,8 @@ std::string ScoringParams::matchingRule() const {
     << robot_match_max_feet_distance_m << " m of the true ground point. Orientation tolerance "
     << orientation_tolerance_deg << " deg. Lines: both ends of a detected segment within "
     << line_match_max_px << " px of a true line in view (at least " << line_min_length_px
-    << " px of it visible). Intersections: same type within " << intersection_match_max_px
+    << " px of it visible within " << field_feature_max_distance_m
+    << " m of the observer). Intersections: same type within " << intersection_match_max_px
     << " px.";
   return s.str();
 }

@@ -115,3 +115,54 @@ TEST(Report, SaysAbsentAndShowsThePapersNumbers) {
 
 }  // namespace
 }  // namespace colorfree
+
+namespace colorfree {
+namespace {
+
+TEST(Report, ChartsAndGalleryFromHandMadeFrames) {
+  ScoringParams params;
+  params.orientation_heading_bin_deg = 90;
+  Scorer s(params, FieldDimensions{});
+  GrayImage image(320, 240, 70);
+  for (int y = 90; y < 110; ++y)
+    for (int x = 90; x < 110; ++x) image.at(x, y) = 230;
+  for (double light : {0.3, 1.0}) {
+    s.beginCase({light < 0.5 ? "dim" : "bright", {{"lighting.scale", light}}, {}});
+    for (int i = 0; i < 4; ++i) {
+      FrameTruth t;
+      t.frame_index = i;
+      t.ball_present = true;
+      t.ball.in_view = t.ball.should_detect = true;
+      t.ball.centre_px = {100, 100};
+      t.ball.radius_px = 10;
+      t.ball.visible_fraction = 1;
+      RobotInImage r;
+      r.in_view = r.should_detect = true;
+      r.box = {200, 40, 240, 120};
+      r.heading_rel_rad = (i % 4) * 3.14159265358979 / 2;
+      r.heading_in_observer_rad = r.heading_rel_rad;
+      t.robots = {r};
+      FramePercepts p;
+      p.ball_proposals = {BallProposal{{100, 100}, 10, 1}};
+      p.balls = std::vector<BallPercept>{};
+      if (light > 0.5 || i == 0) p.balls->push_back(BallPercept{{101, 100}, 10, 0.9, {}});
+      if (i == 3) p.balls->push_back(BallPercept{{40, 200}, 8, 0.7, {}});
+      p.robots = {RobotPercept{}};
+      p.robots->at(0).box = r.box;
+      p.robots->at(0).orientation_raw = RobotOrientation{r.heading_in_observer_rad + (i == 1 ? 1.0 : 0.0), true};
+      p.orientation_stage = true;
+      s.addFrame(t, p, nullptr, &image);
+    }
+  }
+  const std::string html = renderReportHtml(s.results({"demo", 1, "v"}), s.gallery(), {});
+  EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  EXPECT_NE(html.find("Detection rate against lighting.scale"), std::string::npos);
+  EXPECT_NE(html.find("Orientation classes per true heading, raw"), std::string::npos);
+  EXPECT_NE(html.find("Missed balls"), std::string::npos);
+  EXPECT_NE(html.find("False balls"), std::string::npos);
+  EXPECT_NE(html.find("Orientation false positives"), std::string::npos);
+  std::ofstream(::testing::TempDir() + "/report_demo.html") << html;
+}
+
+}  // namespace
+}  // namespace colorfree

@@ -17,7 +17,7 @@ struct ScoringParams {
   double robot_max_distance_m = 6.0;
   double robot_min_height_px = 12.0;  ///< projected whole-body box height
   // Robot body model (width and height from FieldDimensions).
-  double robot_depth_m = 0.275;
+  double robot_depth_m = 0.21;  ///< side view with arms and stride; the outline is an ellipse
   double robot_feet_region_height_m = 0.12;
   double foot_lateral_offset_m = 0.05;
   // Matching.
@@ -29,10 +29,15 @@ struct ScoringParams {
   double orientation_tolerance_deg = 11.25;
   double orientation_heading_bin_deg = 22.5;
   // Field features.
+  double field_feature_max_distance_m = 6.0;  ///< markings farther from the observer are left out
   double line_min_length_px = 20.0;
   double line_match_max_px = 6.0;
   double intersection_match_max_px = 12.0;
   int feature_visibility_window_px = 3;
+  /// The feature-based pose fit starts from the true pose moved by this much (diagonally) and
+  /// turned by this angle, so a fit that does not move shows the offset as its error.
+  double pose_guess_offset_m = 0.2;
+  double pose_guess_offset_deg = 5.0;
   // Report.
   double distance_bin_m = 0.5;
   int gallery_max_crops = 24;
