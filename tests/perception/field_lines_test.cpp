@@ -126,8 +126,10 @@ TEST_P(FieldLinesOnSyntheticField, EverythingFoundIsWhereItWasDrawn) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, FieldLinesOnSyntheticField,
-                         ::testing::Combine(::testing::Range(0, 5), ::testing::Values(0.0, 0.5),
-                                            ::testing::Values(std::uint64_t{1}, std::uint64_t{2})));
+                         ::testing::Values(SceneParam{0, 0.0, 1}, SceneParam{0, 0.5, 2}, SceneParam{1, 0.0, 3},
+                                           SceneParam{1, 0.5, 4}, SceneParam{2, 0.0, 5}, SceneParam{2, 0.5, 6},
+                                           SceneParam{3, 0.0, 7}, SceneParam{3, 0.5, 8}, SceneParam{4, 0.0, 9},
+                                           SceneParam{4, 0.5, 10}));
 
 class FieldLinesLighting : public ::testing::TestWithParam<double> {};
 

@@ -91,6 +91,11 @@ inline GrayImage renderScene(const CameraModel& camera, const SyntheticScene& sc
   const double p1 = phase(rng), p2 = phase(rng), p3 = phase(rng);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
+      // The carpet's texture from the pixel's centre; paint coverage from 2×2 rays.
+      const auto centre = camera.pixelToGround({x + 0.5, y + 0.5});
+      const double carpet =
+          centre ? scene.carpet + scene.texture * (std::sin(centre->x() * 7.1 + p2) * std::cos(centre->y() * 5.3 + p3))
+                 : scene.carpet;
       double sum = 0;
       for (int sy = 0; sy < 2; ++sy) {
         for (int sx = 0; sx < 2; ++sx) {
@@ -102,11 +107,7 @@ inline GrayImage renderScene(const CameraModel& camera, const SyntheticScene& sc
             sum += scene.background + 40 * std::sin(bx * 1.7 + by * 2.3 + p1);
             continue;
           }
-          if (painted(scene, *g)) {
-            sum += scene.paint;
-          } else {
-            sum += scene.carpet + scene.texture * (std::sin(g->x() * 7.1 + p2) * std::cos(g->y() * 5.3 + p3));
-          }
+          sum += painted(scene, *g) ? scene.paint : carpet;
         }
       }
       const double light = 1.0 - scene.gradient * x / w;
