@@ -1,8 +1,10 @@
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -333,6 +335,8 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
         const pid_t pid = ::fork();
         if (pid < 0) throw Error("bench: cannot start a worker process");
         if (pid == 0) {
+          // A worker ends with the bench that started it.
+          ::prctl(PR_SET_PDEATHSIG, SIGTERM);
           int rc = 0;
           try {
             runShard(plan, k, jobs, shardFile(work, k, jobs), "worker " + std::to_string(k));
