@@ -59,6 +59,9 @@ std::string fmt(const json& v, int prec = 3, double scale = 1, const char* unit 
   return buf;
 }
 
+// A paper figure: "-" where the paper gives none.
+std::string paperFmt(const json& v, int prec = 3) { return v.is_number() ? fmt(v, prec) : "-"; }
+
 std::string esc(const std::string& s) {
   std::string o;
   for (char c : s) {
@@ -287,8 +290,8 @@ void printBenchTables(const json& results) {
     for (const auto& [label, key] : rows) {
       const int prec = key == "proposals_per_frame" ? 2 : 3;
       std::printf("  %-28s %9s %9s %9s %9s\n", label.c_str(), fmt(t.at("robot").at(key), prec).c_str(),
-                  fmt(at(t, "paper.robot." + key), prec == 2 ? 2 : 3).c_str(), fmt(t.at("ball").at(key), prec).c_str(),
-                  fmt(at(t, "paper.ball." + key), prec == 2 ? 1 : 3).c_str());
+                  paperFmt(at(t, "paper.robot." + key), prec == 2 ? 2 : 3).c_str(), fmt(t.at("ball").at(key), prec).c_str(),
+                  paperFmt(at(t, "paper.ball." + key), prec == 2 ? 1 : 3).c_str());
     }
   }
   for (const char* which : {"orientation_static", "orientation_dynamic"}) {
@@ -331,8 +334,8 @@ void printBenchTables(const json& results) {
       const std::string key = st.at("stage").get<std::string>();
       const auto title = kStageTitles.find(key);
       std::printf("  %-26s %9s %9s %11s %10s\n", (title != kStageTitles.end() ? title->second : key).c_str(),
-                  fmt(st.at("mean_ms")).c_str(), fmt(st.at("max_ms")).c_str(), fmt(st.at("paper_mean_ms")).c_str(),
-                  fmt(st.at("paper_max_ms")).c_str());
+                  fmt(st.at("mean_ms")).c_str(), fmt(st.at("max_ms")).c_str(), paperFmt(st.at("paper_mean_ms")).c_str(),
+                  paperFmt(st.at("paper_max_ms")).c_str());
     }
   }
   if (results.contains("cnn_table") && !results.at("cnn_table").empty()) {
