@@ -49,15 +49,19 @@ void printSummary(const nlohmann::json& r) {
   std::printf("%-34s %10s %10s   %10s %10s\n", "proposals per frame",
               show(r, "robot.proposals_per_frame", 2).c_str(), "3.05",
               show(r, "ball.proposals_per_frame", 2).c_str(), "10.3");
-  std::printf("%-34s %10s %10s   %10s %10s\n", "proposal recall", show(r, "robot.proposal_recall").c_str(),
-              "0.972", show(r, "ball.proposal_recall").c_str(), "0.993");
-  std::printf("%-34s %10s %10s   %10s %10s\n", "detection rate", show(r, "robot.detection_rate").c_str(),
-              "0.949", show(r, "ball.detection_rate").c_str(), "0.971");
+  std::printf("%-34s %10s %10s   %10s %10s\n", "proposal recall",
+              show(r, "robot.proposal_recall").c_str(), "0.972",
+              show(r, "ball.proposal_recall").c_str(), "0.993");
+  std::printf("%-34s %10s %10s   %10s %10s\n", "detection rate",
+              show(r, "robot.detection_rate").c_str(), "0.949",
+              show(r, "ball.detection_rate").c_str(), "0.971");
   std::printf("%-34s %10s %10s   %10s %10s\n", "false positives per frame",
               show(r, "robot.false_positives_per_frame").c_str(), "-",
               show(r, "ball.false_positives_per_frame").c_str(), "-");
-  std::printf("orientation perceived (raw / filtered): %s / %s  (paper 99.88 %% static, 95.52 %% dynamic)\n",
-              show(r, "orientation.perceived").c_str(), show(r, "orientation.filtered.perceived").c_str());
+  std::printf(
+      "orientation perceived (raw / filtered): %s / %s  (paper 99.88 %% static, 95.52 %% "
+      "dynamic)\n",
+      show(r, "orientation.perceived").c_str(), show(r, "orientation.filtered.perceived").c_str());
   std::printf("pose error from field features: %s mm (paper 40.07 mm)\n",
               show(r, "field_features.pose_error_mm", 1).c_str());
 }
@@ -66,8 +70,9 @@ void printSummary(const nlohmann::json& r) {
 
 void addRunCommand(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand(
-      "run", "Render a scenario, run the perception on every frame, score it against the truth and "
-             "write results.json and report.html");
+      "run",
+      "Render a scenario, run the perception on every frame, score it against the truth and "
+      "write results.json and report.html");
   struct Args {
     std::string scenario;
     std::string out;
@@ -84,7 +89,8 @@ void addRunCommand(CLI::App& app, int& exit_code) {
                   "Scoring parameters (default groundtruth/params/scoring.yaml)");
   cmd->add_option("--case", args->case_index, "Run only this case (0-based)");
   cmd->add_option("--frames", args->frames, "Frames per case instead of the scenario's count");
-  cmd->add_flag("--save-frames", args->save_frames, "Also write every frame as PNG under DIR/frames");
+  cmd->add_flag("--save-frames", args->save_frames,
+                "Also write every frame as PNG under DIR/frames");
   cmd->add_flag("--quiet", args->quiet, "No progress bar");
   cmd->callback([args, &exit_code]() {
     sim::Scenario scenario = sim::Scenario::load(args->scenario);
@@ -96,15 +102,16 @@ void addRunCommand(CLI::App& app, int& exit_code) {
       validateExpectations({expectations.back()}, origin);
     }
     if (args->case_index >= static_cast<int>(scenario.cases.size())) {
-      throw Error(args->scenario + ": no case " + std::to_string(args->case_index) + " (the scenario has " +
-                  std::to_string(scenario.cases.size()) + ")");
+      throw Error(args->scenario + ": no case " + std::to_string(args->case_index) +
+                  " (the scenario has " + std::to_string(scenario.cases.size()) + ")");
     }
     if (args->frames < 0) throw Error("--frames must be positive");
     ScoringParams params =
         args->scoring.empty() ? ScoringParams::loadDefault() : ScoringParams::load(args->scoring);
     // Rounded to a milli-degree: the scenario keeps 22.5° as 0.3927 rad (22.50005°).
     params.orientation_tolerance_deg =
-        std::round(scenario.cases.front().settings.orientation_tolerance_rad * kRadToDeg * 1e3) / 1e3;
+        std::round(scenario.cases.front().settings.orientation_tolerance_rad * kRadToDeg * 1e3) /
+        1e3;
 
     namespace fs = std::filesystem;
     fs::create_directories(args->out);
@@ -119,7 +126,8 @@ void addRunCommand(CLI::App& app, int& exit_code) {
       if (args->case_index < 0 || args->case_index == c) cases.push_back(c);
     }
     int total = 0;
-    for (int c : cases) total += args->frames > 0 ? args->frames : scenario.cases[c].settings.frames;
+    for (int c : cases)
+      total += args->frames > 0 ? args->frames : scenario.cases[c].settings.frames;
 
     Scorer scorer(params, FieldDimensions::loadDefault());
     PerceptionRunner perception;
@@ -146,16 +154,18 @@ void addRunCommand(CLI::App& app, int& exit_code) {
       scorer.beginCase(info);
       const std::string frame_dir = args->out + "/frames/" + caseFolder(c);
       if (args->save_frames) fs::create_directories(frame_dir);
-      runner.runCase(c, args->frames > 0 ? args->frames : -1, true, [&](const sim::RenderedFrame& f) {
-        FieldPose guess = f.truth.observer;
-        guess.x_m += params.pose_guess_offset_m / std::sqrt(2.0);
-        guess.y_m += params.pose_guess_offset_m / std::sqrt(2.0);
-        guess.heading_rad += params.pose_guess_offset_deg / kRadToDeg;
-        const FramePercepts percepts = perception.process(f.image, f.truth.camera.model, guess);
-        scorer.addFrame(f.truth, percepts, &f.image);
-        if (args->save_frames) writeGrayPng(frame_dir + "/" + frameFile(f.frame_index), f.image.view());
-        bar.update(++done, total, info.name);
-      });
+      runner.runCase(
+          c, args->frames > 0 ? args->frames : -1, true, [&](const sim::RenderedFrame& f) {
+            FieldPose guess = f.truth.observer;
+            guess.x_m += params.pose_guess_offset_m / std::sqrt(2.0);
+            guess.y_m += params.pose_guess_offset_m / std::sqrt(2.0);
+            guess.heading_rad += params.pose_guess_offset_deg / kRadToDeg;
+            const FramePercepts percepts = perception.process(f.image, f.truth.camera.model, guess);
+            scorer.addFrame(f.truth, percepts, &f.image);
+            if (args->save_frames)
+              writeGrayPng(frame_dir + "/" + frameFile(f.frame_index), f.image.view());
+            bar.update(++done, total, info.name);
+          });
     }
 
     RunInfo run;
@@ -173,7 +183,8 @@ void addRunCommand(CLI::App& app, int& exit_code) {
       lines.push_back(line);
     }
     results["expectations"] = nlohmann::json::array();
-    for (const auto& l : lines) results["expectations"].push_back({{"text", l.text}, {"met", l.met}});
+    for (const auto& l : lines)
+      results["expectations"].push_back({{"text", l.text}, {"met", l.met}});
     // The report first, results.json last: results.json present means the run completed.
     writeFileAtomic(report_path, renderReportHtml(results, scorer.gallery(), lines));
     writeFileAtomic(results_path, results.dump(2) + "\n");
@@ -181,7 +192,8 @@ void addRunCommand(CLI::App& app, int& exit_code) {
     std::printf("%s: %d frames scored, results in %s\n", scenario.name.c_str(), scorer.frameCount(),
                 results_path.c_str());
     printSummary(results);
-    for (const auto& f : failures) std::fprintf(stderr, "colorfree: %s\n", f.message(scenario.name).c_str());
+    for (const auto& f : failures)
+      std::fprintf(stderr, "colorfree: %s\n", f.message(scenario.name).c_str());
     exit_code = failures.empty() ? 0 : 1;
   });
 }

@@ -6,14 +6,22 @@ namespace colorfree::app {
 
 std::string stageKey(Stage stage) {
   switch (stage) {
-    case Stage::kIgnoreRegions: return "ignore_regions";
-    case Stage::kHighContrast: return "high_contrast";
-    case Stage::kFieldLines: return "field_features";
-    case Stage::kRobotProposals: return "robot_proposals";
-    case Stage::kRobotDetector: return "robot_detector";
-    case Stage::kRobotOrientation: return "robot_orientation";
-    case Stage::kBallProposals: return "ball_proposals";
-    case Stage::kBallDetector: return "ball_detector";
+    case Stage::kIgnoreRegions:
+      return "ignore_regions";
+    case Stage::kHighContrast:
+      return "high_contrast";
+    case Stage::kFieldLines:
+      return "field_features";
+    case Stage::kRobotProposals:
+      return "robot_proposals";
+    case Stage::kRobotDetector:
+      return "robot_detector";
+    case Stage::kRobotOrientation:
+      return "robot_orientation";
+    case Stage::kBallProposals:
+      return "ball_proposals";
+    case Stage::kBallDetector:
+      return "ball_detector";
   }
   return "unknown";
 }

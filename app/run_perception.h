@@ -15,7 +15,8 @@ class PerceptionRunner {
   PerceptionRunner();
   /// `pose_guess` starts the feature-based pose fit (the truth moved by the scoring offset, so a
   /// fit that does not move shows that offset as its error).
-  FramePercepts process(const GrayImage& image, const CameraModel& camera, const FieldPose& pose_guess);
+  FramePercepts process(const GrayImage& image, const CameraModel& camera,
+                        const FieldPose& pose_guess);
   /// Timing over all frames so far, as the pipeline keeps it.
   const PipelineStats& stats() const { return stats_; }
 

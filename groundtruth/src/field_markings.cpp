@@ -13,7 +13,9 @@ FieldMarkings FieldMarkings::fromDimensions(const FieldDimensions& d) {
   auto line = [&](const std::string& name, double x0, double y0, double x1, double y1) {
     m.lines.push_back({name, {x0, y0}, {x1, y1}});
   };
-  auto add = [&](IntersectionType t, double x, double y) { m.intersections.push_back({t, {x, y}}); };
+  auto add = [&](IntersectionType t, double x, double y) {
+    m.intersections.push_back({t, {x, y}});
+  };
   line("touch line left", -hl, hw, hl, hw);
   line("touch line right", -hl, -hw, hl, -hw);
   line("halfway line", 0, -hw, 0, hw);
@@ -45,9 +47,12 @@ FieldMarkings FieldMarkings::fromDimensions(const FieldDimensions& d) {
 
 const char* intersectionTypeName(IntersectionType type) {
   switch (type) {
-    case IntersectionType::kL: return "L";
-    case IntersectionType::kT: return "T";
-    case IntersectionType::kX: return "X";
+    case IntersectionType::kL:
+      return "L";
+    case IntersectionType::kT:
+      return "T";
+    case IntersectionType::kX:
+      return "X";
   }
   return "?";
 }

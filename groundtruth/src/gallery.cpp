@@ -33,7 +33,8 @@ std::string cropPngBase64(const GrayImage& image, PixelBox region,
   const int y0 = std::clamp(static_cast<int>(std::floor(region.y0 - pad)), 0, image.height() - 1);
   const int x1 = std::clamp(static_cast<int>(std::ceil(region.x1 + pad)), x0 + 1, image.width());
   const int y1 = std::clamp(static_cast<int>(std::ceil(region.y1 + pad)), y0 + 1, image.height());
-  const cv::Mat gray(image.height(), image.width(), CV_8UC1, const_cast<std::uint8_t*>(image.data()));
+  const cv::Mat gray(image.height(), image.width(), CV_8UC1,
+                     const_cast<std::uint8_t*>(image.data()));
   cv::Mat crop;
   const double scale = static_cast<double>(out_size_px) / std::max(x1 - x0, y1 - y0);
   cv::resize(gray(cv::Rect(x0, y0, x1 - x0, y1 - y0)), crop, cv::Size(), scale, scale,
@@ -57,7 +58,9 @@ std::string cropPngBase64(const GrayImage& image, PixelBox region,
       case Overlay::Shape::kBox:
         cv::rectangle(bgr, pt({o.box.x0, o.box.y0}), pt({o.box.x1, o.box.y1}), colour, thick);
         break;
-      case Overlay::Shape::kLine: cv::line(bgr, pt(o.a), pt(o.b), colour, thick, cv::LINE_AA); break;
+      case Overlay::Shape::kLine:
+        cv::line(bgr, pt(o.a), pt(o.b), colour, thick, cv::LINE_AA);
+        break;
       case Overlay::Shape::kCross:
         cv::drawMarker(bgr, pt(o.a), colour, cv::MARKER_CROSS, 10, thick);
         break;

@@ -80,7 +80,8 @@ std::optional<double> metricValue(const nlohmann::json& results, const std::stri
   std::size_t start = 0;
   while (start <= metric.size()) {
     const std::size_t dot = metric.find('.', start);
-    const std::string key = metric.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
+    const std::string key =
+        metric.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
     if (!node->is_object() || !node->contains(key)) return std::nullopt;
     node = &(*node)[key];
     if (dot == std::string::npos) break;
@@ -97,11 +98,16 @@ std::vector<ExpectationFailure> checkExpectations(const std::vector<Expectation>
     const auto v = metricValue(results, e.metric);
     bool ok = false;
     if (v) {
-      if (e.op == ">=") ok = *v >= e.bound;
-      else if (e.op == "<=") ok = *v <= e.bound;
-      else if (e.op == ">") ok = *v > e.bound;
-      else if (e.op == "<") ok = *v < e.bound;
-      else ok = *v == e.bound;
+      if (e.op == ">=")
+        ok = *v >= e.bound;
+      else if (e.op == "<=")
+        ok = *v <= e.bound;
+      else if (e.op == ">")
+        ok = *v > e.bound;
+      else if (e.op == "<")
+        ok = *v < e.bound;
+      else
+        ok = *v == e.bound;
     }
     if (!ok) failures.push_back({e, v});
   }

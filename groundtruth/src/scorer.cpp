@@ -24,6 +24,7 @@ struct ObjectTally {
   long proposal_frames = 0, proposals = 0, proposal_truths = 0, proposal_hits = 0;
   long detector_frames = 0, percepts = 0, truths = 0, detected = 0, false_positives = 0;
   long true_positives = 0;
+  long should_detect = 0;  // whether or not a detector ran
   long position_errors = 0;
   double position_error_sum = 0, position_error_sq = 0;
 };
@@ -62,24 +63,37 @@ struct Tally {
   std::map<std::string, ClassifierTally> classifiers;
 };
 
-json rate(long num, long den) { return den > 0 ? json(static_cast<double>(num) / den) : json(nullptr); }
-json perFrame(long n, long frames) { return frames > 0 ? json(static_cast<double>(n) / frames) : json(nullptr); }
+json rate(long num, long den) {
+  return den > 0 ? json(static_cast<double>(num) / den) : json(nullptr);
+}
+json perFrame(long n, long frames) {
+  return frames > 0 ? json(static_cast<double>(n) / frames) : json(nullptr);
+}
 
 json objectJson(const ObjectTally& t) {
   json j;
   j["detection_rate"] = t.detector_frames > 0 ? rate(t.detected, t.truths) : json(nullptr);
-  j["proposal_recall"] = t.proposal_frames > 0 ? rate(t.proposal_hits, t.proposal_truths) : json(nullptr);
+  j["proposal_recall"] =
+      t.proposal_frames > 0 ? rate(t.proposal_hits, t.proposal_truths) : json(nullptr);
   j["proposals_per_frame"] = perFrame(t.proposals, t.proposal_frames);
   j["false_positives_per_frame"] = perFrame(t.false_positives, t.detector_frames);
   j["precision"] = rate(t.true_positives, t.true_positives + t.false_positives);
-  j["position_error_m"] = t.position_errors > 0 ? json(t.position_error_sum / t.position_errors) : json(nullptr);
-  j["position_error_rms_m"] =
-      t.position_errors > 0 ? json(std::sqrt(t.position_error_sq / t.position_errors)) : json(nullptr);
-  j["counts"] = {{"proposal_frames", t.proposal_frames}, {"proposals", t.proposals},
-                 {"proposal_truths", t.proposal_truths}, {"proposal_hits", t.proposal_hits},
-                 {"detector_frames", t.detector_frames}, {"percepts", t.percepts},
-                 {"truths", t.truths}, {"detected", t.detected},
-                 {"true_positives", t.true_positives}, {"false_positives", t.false_positives}};
+  j["position_error_m"] =
+      t.position_errors > 0 ? json(t.position_error_sum / t.position_errors) : json(nullptr);
+  j["position_error_rms_m"] = t.position_errors > 0
+                                  ? json(std::sqrt(t.position_error_sq / t.position_errors))
+                                  : json(nullptr);
+  j["counts"] = {{"proposal_frames", t.proposal_frames},
+                 {"proposals", t.proposals},
+                 {"proposal_truths", t.proposal_truths},
+                 {"proposal_hits", t.proposal_hits},
+                 {"detector_frames", t.detector_frames},
+                 {"percepts", t.percepts},
+                 {"truths", t.truths},
+                 {"detected", t.detected},
+                 {"should_detect", t.should_detect},
+                 {"true_positives", t.true_positives},
+                 {"false_positives", t.false_positives}};
   return j;
 }
 
@@ -98,7 +112,9 @@ json classesJson(const ClassCounts& c, bool present) {
 json distanceJson(const std::map<int, BinTally>& bins, double bin_m) {
   json a = json::array();
   for (const auto& [k, b] : bins) {
-    a.push_back({{"from_m", k * bin_m}, {"to_m", (k + 1) * bin_m}, {"truths", b.truths},
+    a.push_back({{"from_m", k * bin_m},
+                 {"to_m", (k + 1) * bin_m},
+                 {"truths", b.truths},
                  {"detection_rate", rate(b.detected, b.truths)}});
   }
   return a;
@@ -124,23 +140,29 @@ json tallyJson(const Tally& t, const ScoringParams& p) {
   json f;
   const bool ff = t.field_frames > 0;
   f["line_detection_rate"] = ff ? rate(t.lines.hits, t.lines.truths) : json(nullptr);
-  f["intersection_detection_rate"] = ff ? rate(t.intersections.hits, t.intersections.truths) : json(nullptr);
+  f["intersection_detection_rate"] =
+      ff ? rate(t.intersections.hits, t.intersections.truths) : json(nullptr);
   f["centre_circle_detection_rate"] = ff ? rate(t.circle.hits, t.circle.truths) : json(nullptr);
   f["penalty_mark_detection_rate"] = ff ? rate(t.marks.hits, t.marks.truths) : json(nullptr);
-  f["false_lines_per_frame"] = ff ? perFrame(t.lines.false_positives, t.field_frames) : json(nullptr);
+  f["false_lines_per_frame"] =
+      ff ? perFrame(t.lines.false_positives, t.field_frames) : json(nullptr);
   f["false_intersections_per_frame"] =
       ff ? perFrame(t.intersections.false_positives, t.field_frames) : json(nullptr);
   f["pose_error_mm"] = t.pose_fits > 0 ? json(t.pose_error_sum_mm / t.pose_fits) : json(nullptr);
-  f["pose_error_rms_mm"] = t.pose_fits > 0 ? json(std::sqrt(t.pose_error_sq_mm / t.pose_fits)) : json(nullptr);
+  f["pose_error_rms_mm"] =
+      t.pose_fits > 0 ? json(std::sqrt(t.pose_error_sq_mm / t.pose_fits)) : json(nullptr);
   f["pose_fit_rate"] = t.pose_frames > 0 ? rate(t.pose_fits, t.pose_frames) : json(nullptr);
   f["counts"] = {{"frames", t.field_frames},
-                 {"lines_in_view", t.lines.truths}, {"lines_detected", t.lines.hits},
-                 {"line_percepts", t.lines.percepts}, {"false_lines", t.lines.false_positives},
+                 {"lines_in_view", t.lines.truths},
+                 {"lines_detected", t.lines.hits},
+                 {"line_percepts", t.lines.percepts},
+                 {"false_lines", t.lines.false_positives},
                  {"intersections_in_view", t.intersections.truths},
                  {"intersections_detected", t.intersections.hits},
                  {"intersection_percepts", t.intersections.percepts},
                  {"false_intersections", t.intersections.false_positives},
-                 {"pose_frames", t.pose_frames}, {"pose_fits", t.pose_fits}};
+                 {"pose_frames", t.pose_frames},
+                 {"pose_fits", t.pose_fits}};
   j["field_features"] = f;
   json tm = json::object();
   for (const auto& s : paperStageNames()) tm[s] = {{"mean", nullptr}, {"max", nullptr}};
@@ -152,8 +174,10 @@ json tallyJson(const Tally& t, const ScoringParams& p) {
   json cnn = json::object();
   for (const auto& s : paperClassifierNames()) cnn[s] = {{"accuracy", nullptr}, {"samples", 0}};
   for (const auto& [name, c] : t.classifiers) {
-    cnn[name] = {{"accuracy", rate(c.correct, c.samples)}, {"samples", c.samples},
-                 {"true_positives", c.true_pos}, {"false_positives", c.false_pos},
+    cnn[name] = {{"accuracy", rate(c.correct, c.samples)},
+                 {"samples", c.samples},
+                 {"true_positives", c.true_pos},
+                 {"false_positives", c.false_pos},
                  {"false_negatives", c.false_neg}};
   }
   j["cnn"] = cnn;
@@ -203,7 +227,8 @@ bool onCircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
   if (pieces.empty()) return false;
   for (const Eigen::Vector2d& p : {a, b, Eigen::Vector2d((a + b) / 2)}) {
     double best = 1e300;
-    for (const auto& piece : pieces) best = std::min(best, pointSegmentDistance(p, piece.start_px, piece.end_px));
+    for (const auto& piece : pieces)
+      best = std::min(best, pointSegmentDistance(p, piece.start_px, piece.end_px));
     if (best > max_px) return false;
   }
   return true;
@@ -221,10 +246,14 @@ std::string fmt(double v, int prec = 2) {
 
 const char* orientationClassName(OrientationClass c) {
   switch (c) {
-    case OrientationClass::kPerceived: return "perceived";
-    case OrientationClass::kSemiPerceived: return "semi_perceived";
-    case OrientationClass::kNotPerceived: return "not_perceived";
-    case OrientationClass::kFalsePositive: return "false_positive";
+    case OrientationClass::kPerceived:
+      return "perceived";
+    case OrientationClass::kSemiPerceived:
+      return "semi_perceived";
+    case OrientationClass::kNotPerceived:
+      return "not_perceived";
+    case OrientationClass::kFalsePositive:
+      return "false_positive";
   }
   return "?";
 }
@@ -246,7 +275,7 @@ OrientationClass classifyOrientation(const std::optional<RobotOrientation>& esti
 
 const std::vector<std::string>& paperStageNames() {
   static const std::vector<std::string> kNames = {
-      "high_contrast", "field_features", "robot_proposals", "robot_detector",
+      "high_contrast",     "field_features", "robot_proposals", "robot_detector",
       "robot_orientation", "ball_proposals", "ball_detector"};
   return kNames;
 }
@@ -269,7 +298,9 @@ struct Scorer::State {
 };
 
 Scorer::Scorer(ScoringParams params, FieldDimensions dims)
-    : params_(params), dims_(dims), field_(FieldMarkings::fromDimensions(dims)),
+    : params_(params),
+      dims_(dims),
+      field_(FieldMarkings::fromDimensions(dims)),
       state_(std::make_unique<State>()) {}
 Scorer::~Scorer() = default;
 Scorer::Scorer(Scorer&&) noexcept = default;
@@ -295,7 +326,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
   const ScoringParams& p = params_;
   const Eigen::Isometry3d robot_to_field = robotToField(truth.observer);
   auto toField = [&](const Eigen::Vector2d& in_robot) {
-    return Eigen::Vector2d((robot_to_field * Eigen::Vector3d(in_robot.x(), in_robot.y(), 0)).head<2>());
+    return Eigen::Vector2d(
+        (robot_to_field * Eigen::Vector3d(in_robot.x(), in_robot.y(), 0)).head<2>());
   };
   auto feetInField = [&](const Eigen::Vector2d& feet_px) -> std::optional<Eigen::Vector2d> {
     if (!camera) return std::nullopt;
@@ -331,7 +363,11 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     o.radius_px = b.radius_px;
     return o;
   };
-  for (const auto& b : balls) frame_overlays.push_back(ballOverlay(b));
+  for (const auto& b : balls) {
+    frame_overlays.push_back(ballOverlay(b));
+    if (b.should_detect)
+      for (Tally* t : tallies) ++t->ball.should_detect;
+  }
   if (pc.ball_proposals) {
     for (Tally* t : tallies) {
       ++t->ball.proposal_frames;
@@ -340,7 +376,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     for (const auto& b : balls) {
       if (!b.should_detect) continue;
       bool hit = false;
-      for (const auto& prop : *pc.ball_proposals) hit = hit || ballMatchCost(b, prop.centre_px, p).has_value();
+      for (const auto& prop : *pc.ball_proposals)
+        hit = hit || ballMatchCost(b, prop.centre_px, p).has_value();
       for (Tally* t : tallies) {
         ++t->ball.proposal_truths;
         if (hit) ++t->ball.proposal_hits;
@@ -357,7 +394,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
         }
       }
     }
-    const Matching m = matchOneToOne(static_cast<int>(balls.size()), static_cast<int>(percepts.size()), cands);
+    const Matching m =
+        matchOneToOne(static_cast<int>(balls.size()), static_cast<int>(percepts.size()), cands);
     for (Tally* t : tallies) {
       ++t->ball.detector_frames;
       t->ball.percepts += static_cast<long>(percepts.size());
@@ -400,12 +438,13 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
             }
           }
         }
-        events.push_back({"missed_ball", b.visible_fraction,
+        events.push_back({"missed_ball",
+                          b.visible_fraction,
                           {b.centre_px.x() - b.radius_px, b.centre_px.y() - b.radius_px,
                            b.centre_px.x() + b.radius_px, b.centre_px.y() + b.radius_px},
                           ov,
-                          where + ": missed ball, r " +
-                              fmt(b.radius_px, 1) + " px, " + fmt(b.distance_m) + " m, visible " +
+                          where + ": missed ball, r " + fmt(b.radius_px, 1) + " px, " +
+                              fmt(b.distance_m) + " m, visible " +
                               fmt(100 * b.visible_fraction, 0) + " %"});
       }
     }
@@ -421,12 +460,12 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       for (Tally* t : tallies) ++t->ball.false_positives;
       ++frame_errors;
       const auto& q = percepts[pi];
-      events.push_back({"false_ball", q.confidence,
+      events.push_back({"false_ball",
+                        q.confidence,
                         {q.centre_px.x() - q.radius_px, q.centre_px.y() - q.radius_px,
                          q.centre_px.x() + q.radius_px, q.centre_px.y() + q.radius_px},
                         {o},
-                        where + ": false ball, confidence " +
-                            fmt(q.confidence)});
+                        where + ": false ball, confidence " + fmt(q.confidence)});
     }
   }
 
@@ -445,7 +484,11 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     o.label += robotSideName(r.side_seen);
     return o;
   };
-  for (const auto* r : robots) frame_overlays.push_back(robotOverlay(*r));
+  for (const auto* r : robots) {
+    frame_overlays.push_back(robotOverlay(*r));
+    if (r->should_detect)
+      for (Tally* t : tallies) ++t->robot.should_detect;
+  }
   if (pc.robot_proposals) {
     for (Tally* t : tallies) {
       ++t->robot.proposal_frames;
@@ -468,19 +511,22 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     std::vector<MatchCandidate> cands;
     for (std::size_t ti = 0; ti < robots.size(); ++ti) {
       for (std::size_t pi = 0; pi < percepts.size(); ++pi) {
-        if (auto c = robotMatchCost(*robots[ti], percepts[pi].box, feetInField(percepts[pi].feet_px), p)) {
+        if (auto c = robotMatchCost(*robots[ti], percepts[pi].box,
+                                    feetInField(percepts[pi].feet_px), p)) {
           cands.push_back({static_cast<int>(ti), static_cast<int>(pi), *c});
         }
       }
     }
-    const Matching m = matchOneToOne(static_cast<int>(robots.size()), static_cast<int>(percepts.size()), cands);
+    const Matching m =
+        matchOneToOne(static_cast<int>(robots.size()), static_cast<int>(percepts.size()), cands);
     for (Tally* t : tallies) {
       ++t->robot.detector_frames;
       t->robot.percepts += static_cast<long>(percepts.size());
       if (pc.orientation_stage) ++t->orientation_frames;
     }
     const double tol = p.orientation_tolerance_deg * kDeg;
-    const int bins = std::max(1, static_cast<int>(std::lround(360.0 / p.orientation_heading_bin_deg)));
+    const int bins =
+        std::max(1, static_cast<int>(std::lround(360.0 / p.orientation_heading_bin_deg)));
     for (std::size_t ti = 0; ti < robots.size(); ++ti) {
       const auto& r = *robots[ti];
       if (!r.should_detect) continue;
@@ -489,10 +535,12 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       if (pi >= 0 && percepts[pi].position_in_robot) {
         err = (toField(*percepts[pi].position_in_robot) - r.position_in_field).norm();
       }
-      OrientationClass raw = OrientationClass::kNotPerceived, filtered = OrientationClass::kNotPerceived;
+      OrientationClass raw = OrientationClass::kNotPerceived,
+                       filtered = OrientationClass::kNotPerceived;
       if (pi >= 0) {
         raw = classifyOrientation(percepts[pi].orientation_raw, r.heading_in_observer_rad, tol);
-        filtered = classifyOrientation(percepts[pi].orientation_filtered, r.heading_in_observer_rad, tol);
+        filtered =
+            classifyOrientation(percepts[pi].orientation_filtered, r.heading_in_observer_rad, tol);
       }
       double rel_deg = r.heading_rel_rad / kDeg;
       if (rel_deg < 0) rel_deg += 360;
@@ -533,15 +581,18 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
           }
         }
         events.push_back({"missed_robot", r.visible_fraction, r.box, ov,
-                          where + ": missed robot " +
-                              std::to_string(r.index) + ", " + fmt(r.distance_m) + " m, visible " +
+                          where + ": missed robot " + std::to_string(r.index) + ", " +
+                              fmt(r.distance_m) + " m, visible " +
                               fmt(100 * r.visible_fraction, 0) + " %"});
       } else if (pc.orientation_stage && raw == OrientationClass::kFalsePositive) {
         Overlay o;
         o.role = Overlay::Role::kPercept;
         o.box = percepts[pi].box;
         o.label = "est " + fmt(percepts[pi].orientation_raw->angle_rad / kDeg, 0) + " deg";
-        events.push_back({"orientation", 1.0, r.box, {robotOverlay(r), o},
+        events.push_back({"orientation",
+                          1.0,
+                          r.box,
+                          {robotOverlay(r), o},
                           where + ": orientation false positive, true " +
                               fmt(r.heading_in_observer_rad / kDeg, 0) + " deg (observer frame), " +
                               fmt(rel_deg, 0) + " deg to the line of sight"});
@@ -555,9 +606,11 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       if (m.percept_to_truth[pi] >= 0) continue;
       for (Tally* t : tallies) ++t->robot.false_positives;
       ++frame_errors;
-      events.push_back({"false_robot", percepts[pi].confidence, percepts[pi].box, {o},
-                        where + ": false robot, confidence " +
-                            fmt(percepts[pi].confidence)});
+      events.push_back({"false_robot",
+                        percepts[pi].confidence,
+                        percepts[pi].box,
+                        {o},
+                        where + ": false robot, confidence " + fmt(percepts[pi].confidence)});
     }
   }
 
@@ -576,14 +629,17 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
           matched = true;
         }
       }
-      if (!matched && !onCircle(l.start_px, l.end_px, fi.circle_pieces, p.line_match_max_px)) ++false_lines;
+      if (!matched && !onCircle(l.start_px, l.end_px, fi.circle_pieces, p.line_match_max_px))
+        ++false_lines;
     }
     std::vector<MatchCandidate> cands;
     for (std::size_t ti = 0; ti < fi.intersections.size(); ++ti) {
       for (std::size_t pi = 0; pi < ff.intersections.size(); ++pi) {
         if (ff.intersections[pi].type != fi.intersections[ti].type) continue;
-        const double d = (ff.intersections[pi].position_px - fi.intersections[ti].position_px).norm();
-        if (d <= p.intersection_match_max_px) cands.push_back({static_cast<int>(ti), static_cast<int>(pi), d});
+        const double d =
+            (ff.intersections[pi].position_px - fi.intersections[ti].position_px).norm();
+        if (d <= p.intersection_match_max_px)
+          cands.push_back({static_cast<int>(ti), static_cast<int>(pi), d});
       }
     }
     const Matching mi = matchOneToOne(static_cast<int>(fi.intersections.size()),
@@ -592,7 +648,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     for (std::size_t ti = 0; ti < fi.penalty_marks.size(); ++ti) {
       for (std::size_t pi = 0; pi < ff.penalty_marks.size(); ++pi) {
         const double d = (ff.penalty_marks[pi].centre_px - fi.penalty_marks[ti].position_px).norm();
-        if (d <= p.intersection_match_max_px) mark_cands.push_back({static_cast<int>(ti), static_cast<int>(pi), d});
+        if (d <= p.intersection_match_max_px)
+          mark_cands.push_back({static_cast<int>(ti), static_cast<int>(pi), d});
       }
     }
     const Matching mm = matchOneToOne(static_cast<int>(fi.penalty_marks.size()),
@@ -611,27 +668,36 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       const auto& x = fi.intersections[ti];
       std::vector<Overlay> ov = {cross(x.position_px, Overlay::Role::kTruth, x.type)};
       for (const auto& q : ff.intersections) {
-        if ((q.position_px - x.position_px).norm() < pad) ov.push_back(cross(q.position_px, Overlay::Role::kPercept, q.type));
+        if ((q.position_px - x.position_px).norm() < pad)
+          ov.push_back(cross(q.position_px, Overlay::Role::kPercept, q.type));
       }
-      events.push_back({"missed_intersection", 0.0,
-                        {x.position_px.x() - pad, x.position_px.y() - pad, x.position_px.x() + pad, x.position_px.y() + pad},
-                        ov, where + ": missed " + intersectionTypeName(x.type) + " at field (" +
-                            fmt(x.position_in_field.x()) + ", " + fmt(x.position_in_field.y()) + ")"});
+      events.push_back({"missed_intersection",
+                        0.0,
+                        {x.position_px.x() - pad, x.position_px.y() - pad, x.position_px.x() + pad,
+                         x.position_px.y() + pad},
+                        ov,
+                        where + ": missed " + intersectionTypeName(x.type) + " at field (" +
+                            fmt(x.position_in_field.x()) + ", " + fmt(x.position_in_field.y()) +
+                            ")"});
     }
     for (std::size_t pi = 0; pi < ff.intersections.size(); ++pi) {
       if (mi.percept_to_truth[pi] >= 0) continue;
       const auto& q = ff.intersections[pi];
       std::vector<Overlay> ov = {cross(q.position_px, Overlay::Role::kPercept, q.type)};
       for (const auto& x : fi.intersections) {
-        if ((q.position_px - x.position_px).norm() < pad) ov.push_back(cross(x.position_px, Overlay::Role::kTruth, x.type));
+        if ((q.position_px - x.position_px).norm() < pad)
+          ov.push_back(cross(x.position_px, Overlay::Role::kTruth, x.type));
       }
-      events.push_back({"false_intersection", 0.0,
-                        {q.position_px.x() - pad, q.position_px.y() - pad, q.position_px.x() + pad, q.position_px.y() + pad},
-                        ov, where + ": false " + intersectionTypeName(q.type)});
+      events.push_back({"false_intersection",
+                        0.0,
+                        {q.position_px.x() - pad, q.position_px.y() - pad, q.position_px.x() + pad,
+                         q.position_px.y() + pad},
+                        ov,
+                        where + ": false " + intersectionTypeName(q.type)});
     }
-    const bool circle_hit = fi.centre_circle_in_view && ff.centre_circle && fi.circle_centre_px &&
-                            (ff.centre_circle->centre_px - *fi.circle_centre_px).norm() <=
-                                p.intersection_match_max_px;
+    const bool circle_hit =
+        fi.centre_circle_in_view && ff.centre_circle && fi.circle_centre_px &&
+        (ff.centre_circle->centre_px - *fi.circle_centre_px).norm() <= p.intersection_match_max_px;
     for (Tally* t : tallies) {
       t->lines.truths += static_cast<long>(fi.lines.size());
       t->lines.hits += std::count(line_hit.begin(), line_hit.end(), true);
@@ -679,7 +745,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     if (s.object == ClassifierSample::Object::kBall) {
       for (const auto& b : balls) label = label || ballMatchCost(b, s.centre_px, p).has_value();
     } else {
-      for (const auto* r : robots) label = label || robotMatchCost(*r, s.box, feetInField(s.feet_px), p).has_value();
+      for (const auto* r : robots)
+        label = label || robotMatchCost(*r, s.box, feetInField(s.feet_px), p).has_value();
     }
     for (Tally* t : tallies) {
       auto& c = t->classifiers[s.classifier];
@@ -702,7 +769,8 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     item.severity = severity;
     item.frame = truth.frame_index;
     list.push_back(std::move(item));
-    std::stable_sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.severity > b.severity; });
+    std::stable_sort(list.begin(), list.end(),
+                     [](const auto& a, const auto& b) { return a.severity > b.severity; });
     if (static_cast<int>(list.size()) > limit) list.pop_back();
     state_->rebuildGallery();
   };
@@ -719,8 +787,9 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       GalleryItem g;
       g.caption = where + ": " + std::to_string(frame_errors) +
                   " misses and false detections (green truth, red percepts)";
-      g.png_base64 = cropPngBase64(*image, {0, 0, static_cast<double>(image->width()), static_cast<double>(image->height())},
-                                   frame_overlays, std::max(image->width(), kFrameThumbWidthPx));
+      g.png_base64 = cropPngBase64(
+          *image, {0, 0, static_cast<double>(image->width()), static_cast<double>(image->height())},
+          frame_overlays, std::max(image->width(), kFrameThumbWidthPx));
       return g;
     });
   }
@@ -756,17 +825,33 @@ namespace colorfree {
 
 namespace {
 
+// Named fields, so that a field added to ObjectTally cannot shift the others.
 json objectState(const ObjectTally& t) {
-  return {t.proposal_frames, t.proposals, t.proposal_truths, t.proposal_hits, t.detector_frames, t.percepts,
-          t.truths, t.detected, t.false_positives, t.true_positives, t.position_errors, t.position_error_sum,
-          t.position_error_sq};
+  return {{"proposal_frames", t.proposal_frames}, {"proposals", t.proposals},
+          {"proposal_truths", t.proposal_truths}, {"proposal_hits", t.proposal_hits},
+          {"detector_frames", t.detector_frames}, {"percepts", t.percepts},
+          {"truths", t.truths}, {"detected", t.detected},
+          {"false_positives", t.false_positives}, {"true_positives", t.true_positives},
+          {"should_detect", t.should_detect}, {"position_errors", t.position_errors},
+          {"position_error_sum", t.position_error_sum}, {"position_error_sq", t.position_error_sq}};
 }
 
 void objectFromState(const json& j, ObjectTally& t) {
-  if (j.size() != 13) throw std::runtime_error("object tally size");
-  t = {j.at(0).get<long>(), j.at(1).get<long>(), j.at(2).get<long>(), j.at(3).get<long>(), j.at(4).get<long>(),
-       j.at(5).get<long>(), j.at(6).get<long>(), j.at(7).get<long>(), j.at(8).get<long>(), j.at(9).get<long>(),
-       j.at(10).get<long>(), j.at(11).get<double>(), j.at(12).get<double>()};
+  if (j.size() != 14) throw std::runtime_error("object tally: expected 14 fields");
+  t.proposal_frames = j.at("proposal_frames").get<long>();
+  t.proposals = j.at("proposals").get<long>();
+  t.proposal_truths = j.at("proposal_truths").get<long>();
+  t.proposal_hits = j.at("proposal_hits").get<long>();
+  t.detector_frames = j.at("detector_frames").get<long>();
+  t.percepts = j.at("percepts").get<long>();
+  t.truths = j.at("truths").get<long>();
+  t.detected = j.at("detected").get<long>();
+  t.false_positives = j.at("false_positives").get<long>();
+  t.true_positives = j.at("true_positives").get<long>();
+  t.should_detect = j.at("should_detect").get<long>();
+  t.position_errors = j.at("position_errors").get<long>();
+  t.position_error_sum = j.at("position_error_sum").get<double>();
+  t.position_error_sq = j.at("position_error_sq").get<double>();
 }
 
 json rateState(const RateTally& t) { return {t.truths, t.hits, t.percepts, t.false_positives}; }
@@ -859,6 +944,7 @@ void addObject(ObjectTally& a, const ObjectTally& b) {
   a.detected += b.detected;
   a.false_positives += b.false_positives;
   a.true_positives += b.true_positives;
+  a.should_detect += b.should_detect;
   a.position_errors += b.position_errors;
   a.position_error_sum += b.position_error_sum;
   a.position_error_sq += b.position_error_sq;

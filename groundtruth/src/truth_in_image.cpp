@@ -90,7 +90,8 @@ std::vector<Eigen::Vector3d> bodyOutline(const FieldPose& pose, double depth, do
       auto se = [](double v) {
         return std::copysign(std::pow(std::abs(v), 2.0 / kFootprintExponent), v);
       };
-      const Eigen::Vector2d g = c + se(std::cos(t)) * depth / 2 * f + se(std::sin(t)) * width / 2 * l;
+      const Eigen::Vector2d g =
+          c + se(std::cos(t)) * depth / 2 * f + se(std::sin(t)) * width / 2 * l;
       out.emplace_back(g.x(), g.y(), z);
     }
   }
@@ -134,9 +135,12 @@ RobotSide sideSeen(double heading_rel_rad) {
 
 const char* robotSideName(RobotSide side) {
   switch (side) {
-    case RobotSide::kFront: return "front";
-    case RobotSide::kBack: return "back";
-    case RobotSide::kSide: return "side";
+    case RobotSide::kFront:
+      return "front";
+    case RobotSide::kBack:
+      return "back";
+    case RobotSide::kSide:
+      return "side";
   }
   return "?";
 }
@@ -158,19 +162,31 @@ std::vector<Eigen::Vector2d> clipPolygonToRect(const std::vector<Eigen::Vector2d
   for (int edge = 0; edge < 4 && !out.empty(); ++edge) {
     auto inside = [&](const Eigen::Vector2d& p) {
       switch (edge) {
-        case 0: return p.x() >= 0;
-        case 1: return p.x() <= w;
-        case 2: return p.y() >= 0;
-        default: return p.y() <= h;
+        case 0:
+          return p.x() >= 0;
+        case 1:
+          return p.x() <= w;
+        case 2:
+          return p.y() >= 0;
+        default:
+          return p.y() <= h;
       }
     };
     auto cross = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
       double t = 0;
       switch (edge) {
-        case 0: t = (0 - a.x()) / (b.x() - a.x()); break;
-        case 1: t = (w - a.x()) / (b.x() - a.x()); break;
-        case 2: t = (0 - a.y()) / (b.y() - a.y()); break;
-        default: t = (h - a.y()) / (b.y() - a.y()); break;
+        case 0:
+          t = (0 - a.x()) / (b.x() - a.x());
+          break;
+        case 1:
+          t = (w - a.x()) / (b.x() - a.x());
+          break;
+        case 2:
+          t = (0 - a.y()) / (b.y() - a.y());
+          break;
+        default:
+          t = (h - a.y()) / (b.y() - a.y());
+          break;
       }
       return Eigen::Vector2d(a + t * (b - a));
     };
@@ -309,7 +325,8 @@ BallInImage ballInImage(const WorldState& w, const FrameProjector& proj, bool us
   b.centre_px = box.centre();
   for (const auto& p : b.outline_px) b.radius_px = std::max(b.radius_px, (p - b.centre_px).norm());
   b.projected_area_px = polygonArea(b.outline_px);
-  const double inside_area = polygonArea(clipPolygonToRect(b.outline_px, proj.width(), proj.height()));
+  const double inside_area =
+      polygonArea(clipPolygonToRect(b.outline_px, proj.width(), proj.height()));
   b.in_view = inside_area > 0;
   if (!b.in_view) return b;
   if (use_map) {
@@ -347,9 +364,9 @@ RobotInImage robotInImage(const WorldState& w, std::size_t i, const FrameProject
   const auto pts = projectOutline(
       proj, bodyOutline(t.pose, params.robot_depth_m, dims.robot_width_m, dims.robot_height_m));
   if (pts.empty()) return r;
-  const auto feet_pts = projectOutline(
-      proj, bodyOutline(t.pose, params.robot_depth_m, dims.robot_width_m,
-                        params.robot_feet_region_height_m));
+  const auto feet_pts =
+      projectOutline(proj, bodyOutline(t.pose, params.robot_depth_m, dims.robot_width_m,
+                                       params.robot_feet_region_height_m));
   const double W = proj.width(), H = proj.height();
   const PixelBox full = boxOf(pts);
   r.box = clipBox(full, W, H);
@@ -372,7 +389,8 @@ RobotInImage robotInImage(const WorldState& w, std::size_t i, const FrameProject
   if (use_map) {
     const std::uint16_t own = static_cast<std::uint16_t>(kObjectRobotBase + i);
     const double ball_dist = (w.ball.position_m - proj.cameraPosition()).norm();
-    const double my_dist = (Eigen::Vector3d(t.pose.x_m, t.pose.y_m, 0) - proj.cameraPosition()).norm();
+    const double my_dist =
+        (Eigen::Vector3d(t.pose.x_m, t.pose.y_m, 0) - proj.cameraPosition()).norm();
     std::vector<bool> nearer(w.robots.size(), false);
     for (std::size_t j = 0; j < w.robots.size(); ++j) {
       const Eigen::Vector3d pj(w.robots[j].pose.x_m, w.robots[j].pose.y_m, 0);
@@ -386,10 +404,11 @@ RobotInImage robotInImage(const WorldState& w, std::size_t i, const FrameProject
           continue;
         }
         if (!insideConvex(hull, Eigen::Vector2d(x + 0.5, y + 0.5))) continue;
-        const bool occluder =
-            label == kObjectOwnBody || (label == kObjectBall && w.ball.present && ball_dist < my_dist) ||
-            (label >= kObjectRobotBase && label - kObjectRobotBase < static_cast<int>(nearer.size()) &&
-             nearer[label - kObjectRobotBase]);
+        const bool occluder = label == kObjectOwnBody ||
+                              (label == kObjectBall && w.ball.present && ball_dist < my_dist) ||
+                              (label >= kObjectRobotBase &&
+                               label - kObjectRobotBase < static_cast<int>(nearer.size()) &&
+                               nearer[label - kObjectRobotBase]);
         if (occluder) ++r.occluded_px;
       }
     }
@@ -440,11 +459,13 @@ FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool 
   const Eigen::Vector2d observer(w.observer.x_m, w.observer.y_m);
   const double max_d = params.field_feature_max_distance_m;
   // Field markings beyond the feature distance are left out, on the ground.
-  auto project = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b)
-      -> std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> {
+  auto project =
+      [&](const Eigen::Vector2d& a,
+          const Eigen::Vector2d& b) -> std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> {
     const auto near = clipToDisc(a, b, observer, max_d);
     if (!near) return std::nullopt;
-    return proj.segment({near->first.x(), near->first.y(), 0}, {near->second.x(), near->second.y(), 0});
+    return proj.segment({near->first.x(), near->first.y(), 0},
+                        {near->second.x(), near->second.y(), 0});
   };
   for (const auto& line : model.lines) {
     const auto s = project(line.start, line.end);
@@ -458,8 +479,10 @@ FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool 
   const Eigen::Vector2d cc = model.centre_circle_centre;
   for (int k = 0; k < kCirclePieces; ++k) {
     const double t0 = 2 * kPi * k / kCirclePieces, t1 = 2 * kPi * (k + 1) / kCirclePieces;
-    const Eigen::Vector2d a = cc + model.centre_circle_radius_m * Eigen::Vector2d(std::cos(t0), std::sin(t0));
-    const Eigen::Vector2d b = cc + model.centre_circle_radius_m * Eigen::Vector2d(std::cos(t1), std::sin(t1));
+    const Eigen::Vector2d a =
+        cc + model.centre_circle_radius_m * Eigen::Vector2d(std::cos(t0), std::sin(t0));
+    const Eigen::Vector2d b =
+        cc + model.centre_circle_radius_m * Eigen::Vector2d(std::cos(t1), std::sin(t1));
     const auto s = project(a, b);
     if (!s) continue;
     LineInImage li{"centre circle", true, s->first, s->second, 0};
@@ -472,7 +495,8 @@ FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool 
   auto pointInView = [&](const Eigen::Vector2d& g) -> std::optional<Eigen::Vector2d> {
     if ((g - observer).norm() > max_d) return std::nullopt;
     const auto p = proj.project({g.x(), g.y(), 0});
-    if (!p || !proj.inImage(*p) || p->x() >= proj.width() || p->y() >= proj.height()) return std::nullopt;
+    if (!p || !proj.inImage(*p) || p->x() >= proj.width() || p->y() >= proj.height())
+      return std::nullopt;
     if (use_map && !hasLabelNear(w.object_map, *p, win, kObjectLine)) return std::nullopt;
     return p;
   };

@@ -44,7 +44,8 @@ TEST(Expectations, ParseAndCheck) {
   EXPECT_DOUBLE_EQ(e.bound, 0.97);
   EXPECT_THROW(parseExpectation("ball.detection_rate about 0.97", "s.yaml"), Error);
   EXPECT_THROW(parseExpectation(">= 0.97", "s.yaml"), Error);
-  const json r = {{"ball", {{"detection_rate", 0.95}}}, {"field_features", {{"pose_error_mm", nullptr}}}};
+  const json r = {{"ball", {{"detection_rate", 0.95}}},
+                  {"field_features", {{"pose_error_mm", nullptr}}}};
   auto f = checkExpectations({e}, r);
   ASSERT_EQ(f.size(), 1u);
   const std::string msg = f[0].message("game");
@@ -63,16 +64,17 @@ TEST(Expectations, ParseAndCheck) {
 
 TEST(Expectations, UnknownMetricIsAnErrorBeforeRunning) {
   const auto& known = knownMetricNames();
-  for (const char* k : {"ball.detection_rate", "ball.proposal_recall", "ball.proposals_per_frame",
-                        "ball.false_positives_per_frame", "robot.detection_rate",
-                        "robot.proposal_recall", "robot.proposals_per_frame",
-                        "robot.false_positives_per_frame", "orientation.perceived",
-                        "orientation.semi_perceived", "orientation.not_perceived",
-                        "orientation.false_positive", "field_features.pose_error_mm",
-                        "timing_ms.ball_detector.mean", "timing_ms.high_contrast.max"}) {
+  for (const char* k :
+       {"ball.detection_rate", "ball.proposal_recall", "ball.proposals_per_frame",
+        "ball.false_positives_per_frame", "robot.detection_rate", "robot.proposal_recall",
+        "robot.proposals_per_frame", "robot.false_positives_per_frame", "orientation.perceived",
+        "orientation.semi_perceived", "orientation.not_perceived", "orientation.false_positive",
+        "field_features.pose_error_mm", "timing_ms.ball_detector.mean",
+        "timing_ms.high_contrast.max"}) {
     EXPECT_TRUE(known.count(k)) << k;
   }
-  EXPECT_NO_THROW(validateExpectations({parseExpectation("robot.detection_rate >= 0.9", "s")}, "s.yaml"));
+  EXPECT_NO_THROW(
+      validateExpectations({parseExpectation("robot.detection_rate >= 0.9", "s")}, "s.yaml"));
   try {
     validateExpectations({parseExpectation("ball.detecton_rate >= 0.9", "s")}, "scenes/x.yaml");
     FAIL();
@@ -103,9 +105,9 @@ TEST(Report, SaysAbsentAndShowsThePapersNumbers) {
   const std::string html = renderReportHtml(s.results({"demo", 3, "v"}), s.gallery(),
                                             {{"ball.detection_rate >= 0.97", false, "n/a"}});
   EXPECT_NE(html.find("absent"), std::string::npos);
-  EXPECT_NE(html.find("0.949"), std::string::npos);   // robot detection, paper
-  EXPECT_NE(html.find("40.07"), std::string::npos);   // pose error, paper
-  EXPECT_NE(html.find("6.959"), std::string::npos);   // ball detector max ms, paper
+  EXPECT_NE(html.find("0.949"), std::string::npos);  // robot detection, paper
+  EXPECT_NE(html.find("40.07"), std::string::npos);  // pose error, paper
+  EXPECT_NE(html.find("6.959"), std::string::npos);  // ball detector max ms, paper
   EXPECT_NE(html.find("NOT MET"), std::string::npos);
   // Self-contained: nothing fetched from elsewhere.
   EXPECT_EQ(html.find("src='http"), std::string::npos);
@@ -149,7 +151,8 @@ TEST(Report, ChartsAndGalleryFromHandMadeFrames) {
       if (i == 3) p.balls->push_back(BallPercept{{40, 200}, 8, 0.7, {}});
       p.robots = {RobotPercept{}};
       p.robots->at(0).box = r.box;
-      p.robots->at(0).orientation_raw = RobotOrientation{r.heading_in_observer_rad + (i == 1 ? 1.0 : 0.0), true};
+      p.robots->at(0).orientation_raw =
+          RobotOrientation{r.heading_in_observer_rad + (i == 1 ? 1.0 : 0.0), true};
       p.orientation_stage = true;
       s.addFrame(t, p, nullptr, &image);
     }

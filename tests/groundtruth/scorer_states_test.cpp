@@ -120,6 +120,7 @@ TEST(ScorerStates, RoundTripGivesTheSameResults) {
   // The test exercises every section (a tally field the states forgot would show here).
   EXPECT_GT(got["ball"]["counts"]["proposal_hits"].get<long>(), 0);
   EXPECT_GT(got["robot"]["counts"]["detected"].get<long>(), 0);
+  EXPECT_GT(got["ball"]["counts"]["should_detect"].get<long>(), 0);
   EXPECT_GT(got["orientation"]["robot_frames"].get<long>(), 0);
   EXPECT_GT(got["orientation"]["per_heading"].size(), 1u);
   EXPECT_TRUE(got["field_features"]["pose_error_mm"].is_number());
@@ -154,7 +155,7 @@ TEST(ScorerStates, MalformedStatesAreAnError) {
   Scorer whole(params(), FieldDimensions{});
   scoreCase(whole, 0);
   json states = whole.caseStates();
-  states["cases"][0]["tally"]["ball"].erase(3);
+  states["cases"][0]["tally"]["ball"].erase("detected");
   EXPECT_THROW(s.addCaseStates(states), Error);
 }
 

@@ -43,7 +43,8 @@ TEST(OrientationClasses, SemiPerceivedIsTheRightAxis) {
   // Facing unknown: either end of the axis within the tolerance.
   EXPECT_EQ(classifyOrientation(facing(5, false), 0, tol), OrientationClass::kSemiPerceived);
   EXPECT_EQ(classifyOrientation(facing(-170, false), 0, tol), OrientationClass::kSemiPerceived);
-  EXPECT_EQ(classifyOrientation(facing(10, false), 350 * kDeg, tol), OrientationClass::kSemiPerceived);
+  EXPECT_EQ(classifyOrientation(facing(10, false), 350 * kDeg, tol),
+            OrientationClass::kSemiPerceived);
   EXPECT_EQ(classifyOrientation(facing(90, false), 0, tol), OrientationClass::kFalsePositive);
   EXPECT_EQ(classifyOrientation(facing(22.6, false), 0, tol), OrientationClass::kFalsePositive);
 }
@@ -132,6 +133,9 @@ TEST(Scorer, AbsentStagesStayAbsent) {
   }
   EXPECT_TRUE(r["cnn"]["BallNet"]["accuracy"].is_null());
   EXPECT_EQ(r["frame_count"], 1);
+  // What should have been detected is counted even without a detector.
+  EXPECT_EQ(r["ball"]["counts"]["should_detect"], 1);
+  EXPECT_EQ(r["ball"]["counts"]["truths"], 0);
 }
 
 TEST(Scorer, BallMetricsOnHandMadeFrames) {
@@ -165,7 +169,7 @@ TEST(Scorer, BallMetricsOnHandMadeFrames) {
 TEST(Scorer, PositionErrorUsesTheObserverPose) {
   Scorer s(ScoringParams{}, FieldDimensions{});
   FrameTruth t = ballFrame();
-  t.observer = {1.0, 2.0, kPi / 2};   // facing +y
+  t.observer = {1.0, 2.0, kPi / 2};       // facing +y
   t.ball.position_in_field = {1.0, 3.5};  // 1.5 m ahead of the observer
   FramePercepts p;
   p.balls = {ballAt(100, 100)};
@@ -259,7 +263,8 @@ TEST(Scorer, FieldFeaturesPoseTimingAndClassifiers) {
   FrameTruth t = ballFrame();
   t.field.lines = {LineInImage{"a", false, {0, 100}, {300, 100}, 300},
                    LineInImage{"b", false, {150, 0}, {150, 240}, 240}};
-  t.field.intersections = {{IntersectionType::kX, {150, 100}, {}}, {IntersectionType::kL, {10, 10}, {}}};
+  t.field.intersections = {{IntersectionType::kX, {150, 100}, {}},
+                           {IntersectionType::kL, {10, 10}, {}}};
   FramePercepts p;
   FieldFeatures ff;
   LinePercept on_a;
@@ -299,7 +304,8 @@ TEST(Scorer, FieldFeaturesPoseTimingAndClassifiers) {
   EXPECT_DOUBLE_EQ(r["field_features"]["intersection_detection_rate"], 0.5);
   EXPECT_DOUBLE_EQ(r["field_features"]["false_intersections_per_frame"], 1);
   EXPECT_NEAR(r["field_features"]["pose_error_mm"].get<double>(), 35, 1e-9);
-  EXPECT_NEAR(r["field_features"]["pose_error_rms_mm"].get<double>(), std::sqrt((900.0 + 1600.0) / 2), 1e-9);
+  EXPECT_NEAR(r["field_features"]["pose_error_rms_mm"].get<double>(),
+              std::sqrt((900.0 + 1600.0) / 2), 1e-9);
   EXPECT_NEAR(r["field_features"]["pose_fit_rate"].get<double>(), 2.0 / 3, 1e-12);
   EXPECT_DOUBLE_EQ(r["timing_ms"]["high_contrast"]["mean"], 2);
   EXPECT_DOUBLE_EQ(r["timing_ms"]["high_contrast"]["max"], 3);

@@ -14,7 +14,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 // An observer at `pose` with a camera `height_m` above its ground point looking along its heading,
 // pitched down by `pitch_rad`.
-WorldState makeWorld(FieldPose observer, double height_m, double pitch_rad, int w = 320, int h = 240) {
+WorldState makeWorld(FieldPose observer, double height_m, double pitch_rad, int w = 320,
+                     int h = 240) {
   WorldState s;
   s.observer = observer;
   CameraPose cp;
@@ -28,7 +29,8 @@ WorldState makeWorld(FieldPose observer, double height_m, double pitch_rad, int 
 void fillDisc(ObjectMap& map, const Eigen::Vector2d& c, double r, std::uint16_t label) {
   for (int y = 0; y < map.height; ++y) {
     for (int x = 0; x < map.width; ++x) {
-      if ((Eigen::Vector2d(x + 0.5, y + 0.5) - c).norm() <= r) map.labels[y * map.width + x] = label;
+      if ((Eigen::Vector2d(x + 0.5, y + 0.5) - c).norm() <= r)
+        map.labels[y * map.width + x] = label;
     }
   }
 }
@@ -95,7 +97,8 @@ TEST(TruthInImage, BallCutByTheBorderAndOccludedInTheObjectMap) {
   // A robot in front of its right 70 %: not visible enough any more.
   for (int y = 0; y < 240; ++y) {
     for (int x = 0; x < 320; ++x) {
-      if (x + 0.5 > t.ball.centre_px.x() - 0.4 * t.ball.radius_px) s.object_map.labels[y * 320 + x] = kObjectRobotBase;
+      if (x + 0.5 > t.ball.centre_px.x() - 0.4 * t.ball.radius_px)
+        s.object_map.labels[y * 320 + x] = kObjectRobotBase;
     }
   }
   t = computeFrameTruth(s, FieldMarkings::fromDimensions({}), {}, ScoringParams{});
@@ -250,7 +253,8 @@ TEST(TruthInImage, IntersectionsAndMarksInViewNeedLinePixels) {
   auto t = computeFrameTruth(s, field, {}, ScoringParams{});
   ASSERT_FALSE(t.field.penalty_marks.empty());
   ASSERT_FALSE(t.field.intersections.empty());
-  // Markings beyond the feature distance do not count (the nearest, the penalty mark, is 2.35 m away).
+  // Markings beyond the feature distance do not count (the nearest, the penalty mark, is 2.35 m
+  // away).
   ScoringParams near;
   near.field_feature_max_distance_m = 2.3;
   const auto far = computeFrameTruth(s, field, {}, near);

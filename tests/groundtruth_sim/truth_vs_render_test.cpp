@@ -56,16 +56,20 @@ void dump(const std::string& name, const GrayImage& gray, const FrameTruth& t) {
   cv::resize(bgr, bgr, cv::Size(), 2, 2, cv::INTER_NEAREST);
   auto pt = [](const Eigen::Vector2d& p) { return cv::Point(int(p.x() * 2), int(p.y() * 2)); };
   for (const auto& l : t.field.lines) cv::line(bgr, pt(l.start_px), pt(l.end_px), {255, 128, 0}, 1);
-  for (const auto& l : t.field.circle_pieces) cv::line(bgr, pt(l.start_px), pt(l.end_px), {255, 128, 0}, 1);
-  for (const auto& i : t.field.intersections) cv::drawMarker(bgr, pt(i.position_px), {0, 0, 255}, cv::MARKER_CROSS, 10);
+  for (const auto& l : t.field.circle_pieces)
+    cv::line(bgr, pt(l.start_px), pt(l.end_px), {255, 128, 0}, 1);
+  for (const auto& i : t.field.intersections)
+    cv::drawMarker(bgr, pt(i.position_px), {0, 0, 255}, cv::MARKER_CROSS, 10);
   for (const auto& r : t.robots) {
     if (!r.in_view) continue;
     cv::rectangle(bgr, pt({r.box.x0, r.box.y0}), pt({r.box.x1, r.box.y1}), {0, 255, 0}, 1);
-    cv::rectangle(bgr, pt({r.feet_box.x0, r.feet_box.y0}), pt({r.feet_box.x1, r.feet_box.y1}), {0, 200, 255}, 1);
+    cv::rectangle(bgr, pt({r.feet_box.x0, r.feet_box.y0}), pt({r.feet_box.x1, r.feet_box.y1}),
+                  {0, 200, 255}, 1);
     cv::circle(bgr, pt(r.left_foot_px), 3, {255, 0, 255}, -1);
     cv::circle(bgr, pt(r.right_foot_px), 3, {255, 0, 255}, -1);
   }
-  if (t.ball.in_view) cv::circle(bgr, pt(t.ball.centre_px), int(t.ball.radius_px * 2), {0, 255, 0}, 1);
+  if (t.ball.in_view)
+    cv::circle(bgr, pt(t.ball.centre_px), int(t.ball.radius_px * 2), {0, 255, 0}, 1);
   cv::imwrite(::testing::TempDir() + "/" + name + ".png", bgr);
 }
 
@@ -91,10 +95,11 @@ class TruthVsRender : public ::testing::Test {
 };
 World* TruthVsRender::world_ = nullptr;
 
-FrameTruth renderAndProject(World& world, NaoCamera cam, const FieldPose& observer, double head_pitch,
-                            double head_yaw, const std::vector<FieldPose>& robots,
-                            const std::vector<double>& speeds, const Eigen::Vector3d& ball,
-                            const std::string& dump_name, WorldState* out_state = nullptr) {
+FrameTruth renderAndProject(World& world, NaoCamera cam, const FieldPose& observer,
+                            double head_pitch, double head_yaw,
+                            const std::vector<FieldPose>& robots, const std::vector<double>& speeds,
+                            const Eigen::Vector3d& ball, const std::string& dump_name,
+                            WorldState* out_state = nullptr) {
   NaoState obs;
   obs.pose = observer;
   obs.posture.head_pitch = head_pitch;
@@ -109,7 +114,8 @@ FrameTruth renderAndProject(World& world, NaoCamera cam, const FieldPose& observ
   world.setBall(ball, Eigen::Quaterniond::Identity());
   WorldState s = renderState(world, cam, 320, 240, observer, robots, ball);
   const FieldDimensions dims = FieldDimensions::loadDefault();
-  const FrameTruth t = computeFrameTruth(s, FieldMarkings::fromDimensions(dims), dims, ScoringParams::loadDefault());
+  const FrameTruth t =
+      computeFrameTruth(s, FieldMarkings::fromDimensions(dims), dims, ScoringParams::loadDefault());
   dump(dump_name, world.render(cam, 320, 240, false).gray, t);
   if (out_state) *out_state = s;
   return t;
@@ -123,7 +129,8 @@ void expectBallCovered(const WorldState& s, const FrameTruth& t) {
     for (int x = 0; x < s.object_map.width; ++x) {
       if (s.object_map.at(x, y) != kObjectBall) continue;
       const Eigen::Vector2d c(x + 0.5, y + 0.5);
-      EXPECT_LE((c - t.ball.centre_px).norm(), t.ball.radius_px + 0.75) << "ball pixel " << x << "," << y;
+      EXPECT_LE((c - t.ball.centre_px).norm(), t.ball.radius_px + 0.75)
+          << "ball pixel " << x << "," << y;
       sum += c;
       ++n;
     }
@@ -151,8 +158,9 @@ void expectRobotBounded(const WorldState& s, const RobotInImage& r) {
   // Only a robot seen whole shows its whole outline.
   const bool whole = r.visible_fraction > 0.9 && r.box.y0 > 0 && r.box.x0 > 0 &&
                      r.box.x1 < s.object_map.width && r.box.y1 < s.object_map.height;
-  std::printf("robot %d: pixels [%.0f %.0f %.0f %.0f], box [%.1f %.1f %.1f %.1f], visible %.2f\n", r.index,
-              b.x0, b.y0, b.x1, b.y1, r.box.x0, r.box.y0, r.box.x1, r.box.y1, r.visible_fraction);
+  std::printf("robot %d: pixels [%.0f %.0f %.0f %.0f], box [%.1f %.1f %.1f %.1f], visible %.2f\n",
+              r.index, b.x0, b.y0, b.x1, b.y1, r.box.x0, r.box.y0, r.box.x1, r.box.y1,
+              r.visible_fraction);
   // The box bounds the robot's pixels...
   EXPECT_GE(b.x0, r.box.x0 - kRobotBoxOutsidePx) << r.index;
   EXPECT_GE(b.y0, r.box.y0 - kRobotBoxOutsidePx) << r.index;
@@ -208,10 +216,13 @@ void expectLinesAgree(const WorldState& s, const FrameTruth& t) {
       if (!g || !gx || !gy) continue;
       const double footprint = std::max((*gx - *g).norm(), (*gy - *g).norm());
       const Eigen::Vector2d f = (robot_to_field * Eigen::Vector3d(g->x(), g->y(), 0)).head<2>();
-      double best = std::abs((f - model.centre_circle_centre).norm() - model.centre_circle_radius_m);
-      for (const auto& m : model.lines) best = std::min(best, pointSegmentDistance(f, m.start, m.end));
+      double best =
+          std::abs((f - model.centre_circle_centre).norm() - model.centre_circle_radius_m);
+      for (const auto& m : model.lines)
+        best = std::min(best, pointSegmentDistance(f, m.start, m.end));
       // Penalty marks and the centre mark are crosses of size penalty_mark_size_m.
-      for (const auto& m : model.penalty_marks) best = std::min(best, std::max(0.0, (f - m).norm() - dims.penalty_mark_size_m));
+      for (const auto& m : model.penalty_marks)
+        best = std::min(best, std::max(0.0, (f - m).norm() - dims.penalty_mark_size_m));
       best = std::min(best, std::max(0.0, f.norm() - dims.penalty_mark_size_m));
       ++checked;
       if (best > dims.line_width_m / 2 + footprint + 0.005) ++off;

@@ -71,7 +71,8 @@ struct RunInfo {
 
 /// A picture for the report: a PNG as base64, with a caption.
 struct GalleryItem {
-  std::string kind;  ///< missed_ball, false_ball, missed_robot, false_robot, orientation, worst_frame
+  std::string
+      kind;  ///< missed_ball, false_ball, missed_robot, false_robot, orientation, worst_frame
   std::string caption;
   double severity = 0;
   int frame = 0;

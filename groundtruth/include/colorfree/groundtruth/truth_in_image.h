@@ -43,7 +43,7 @@ class FrameProjector {
 
 /// The true ball as the camera sees it.
 struct BallInImage {
-  bool in_view = false;          ///< in front of the camera and part of it inside the image
+  bool in_view = false;  ///< in front of the camera and part of it inside the image
   Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();  ///< centre of the projected outline
   double radius_px = 0;          ///< smallest circle about centre_px covering the outline
   double projected_area_px = 0;  ///< area of the whole projected outline (also outside the image)
@@ -67,8 +67,8 @@ struct RobotInImage {
   int visible_px = 0;            ///< this robot's pixels in the object map
   int occluded_px = 0;           ///< hull pixels showing a nearer object
   double visible_fraction = 0;
-  double distance_m = 0;         ///< on the ground, from the observer
-  double heading_rel_rad = 0;    ///< facing relative to the line of sight; 0 = facing the camera
+  double distance_m = 0;       ///< on the ground, from the observer
+  double heading_rel_rad = 0;  ///< facing relative to the line of sight; 0 = facing the camera
   RobotSide side_seen = RobotSide::kFront;
   double heading_in_observer_rad = 0;  ///< facing in the observer's robot frame
   Eigen::Vector2d position_in_field = Eigen::Vector2d::Zero();
