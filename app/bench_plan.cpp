@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "colorfree/groundtruth/results.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/sim/scenario.h"
 #include "colorfree_git_version.h"
@@ -143,7 +144,12 @@ BenchPlan loadBenchPlan(const std::string& list_path, bool quick) {
     // Rounded to a milli-degree: the scenario keeps 22.5° as 0.3927 rad (as colorfree run does).
     x.orientation_tolerance_deg =
         std::round(s.cases.front().settings.orientation_tolerance_rad * kRadToDeg * 1e3) / 1e3;
-    for (const auto& ex : s.expect) x.expectations.push_back(ex.text);
+    for (const auto& ex : s.expect) {
+      // An expectation naming an unknown metric is an error before anything renders.
+      const std::string origin = x.scenario_path + ":" + std::to_string(ex.line);
+      validateExpectations({parseExpectation(ex.text, origin)}, origin);
+      x.expectations.push_back(ex.text);
+    }
     for (const auto& c : s.cases) {
       const auto& st = c.settings;
       const double pixels = static_cast<double>(st.width_px) * st.height_px / (640.0 * 480.0);
