@@ -11,6 +11,7 @@
 #include "colorfree/perception/cnn/shipped_nets.h"
 #include "colorfree/perception/cnn/trainer.h"
 #include "colorfree/perception/error.h"
+#include "cnn_table.h"
 #include "commands.h"
 
 namespace colorfree::app {
@@ -139,6 +140,17 @@ void runTable(const std::string& models, const std::string& data_root) {
       "| net | input | parameters (paper) | multiply-adds | µs/patch single | µs/patch batch 16 | "
       "paper ms | accuracy | paper accuracy |\n");
   std::printf("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (const CnnTableRow& r : cnnTable(models, data_root)) {
+    std::printf("| %s | %dx%dx%d | %lld (%d) | %lld | %.2f | %.2f | %.3f | %s | %.3f |\n", r.name.c_str(), r.input_width,
+                r.input_height, r.input_channels, r.parameters, r.paper_parameters, r.multiply_adds,
+                r.us_per_patch_single, r.us_per_patch_batch16, r.paper_time_ms, r.accuracy.c_str(), r.paper_accuracy);
+  }
+}
+
+}  // namespace
+
+std::vector<CnnTableRow> cnnTable(const std::string& models, const std::string& data_root) {
+  std::vector<CnnTableRow> rows;
   for (const cnn::ShippedNet& s : cnn::kShippedNets) {
     const std::string cfg = models + "/" + s.stem + ".cfg",
                       weights = models + "/" + s.stem + ".weights";
@@ -160,15 +172,24 @@ void runTable(const std::string& models, const std::string& data_root) {
       std::snprintf(buf, sizeof(buf), "%.3f (%d)", e.accuracy, e.samples);
       accuracy = buf;
     }
-    std::printf("| %s | %dx%dx%d | %zu (%d) | %lld | %.2f | %.2f | %.3f | %s | %.3f |\n", s.name,
-                net.input().width, net.input().height, net.input().channels, net.parameterCount(),
-                s.paper_parameters, static_cast<long long>(net.multiplyAdds()),
-                timePerPatchUs(classifier, 1), timePerPatchUs(classifier, 16), s.paper_time_ms,
-                accuracy.c_str(), s.paper_accuracy);
+    CnnTableRow r;
+    r.name = s.name;
+    r.input_width = net.input().width;
+    r.input_height = net.input().height;
+    r.input_channels = net.input().channels;
+    r.parameters = static_cast<long long>(net.parameterCount());
+    r.paper_parameters = s.paper_parameters;
+    r.multiply_adds = static_cast<long long>(net.multiplyAdds());
+    r.us_per_patch_single = timePerPatchUs(classifier, 1);
+    r.us_per_patch_batch16 = timePerPatchUs(classifier, 16);
+    r.paper_time_ms = s.paper_time_ms;
+    r.trained = trained;
+    r.accuracy = accuracy;
+    r.paper_accuracy = s.paper_accuracy;
+    rows.push_back(r);
   }
+  return rows;
 }
-
-}  // namespace
 
 void addTrainCommand(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<TrainOptions>();

@@ -18,4 +18,8 @@ void addTrainCommand(CLI::App& app, int& exit_code);
 void addRunCommand(CLI::App& app, int& exit_code);
 void addDetectCommand(CLI::App& app, int& exit_code);
 
+// `bench` (the paper's experiments, sharded or in worker processes) and `merge` (shard files).
+void addBenchCommand(CLI::App& app, int& exit_code);
+void addMergeCommand(CLI::App& app, int& exit_code);
+
 }  // namespace colorfree::app

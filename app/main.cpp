@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   colorfree::app::addTrainCommand(app, exit_code);
   colorfree::app::addRunCommand(app, exit_code);
   colorfree::app::addDetectCommand(app, exit_code);
+  colorfree::app::addBenchCommand(app, exit_code);
+  colorfree::app::addMergeCommand(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "colorfree/groundtruth/gallery.h"
 #include "colorfree/groundtruth/matching.h"
+#include "colorfree/perception/error.h"
 
 namespace colorfree {
 
@@ -814,6 +816,244 @@ nlohmann::json Scorer::results(const RunInfo& run) const {
   }
   j["cases"] = cases;
   return j;
+}
+
+}  // namespace colorfree
+
+// Case states: the tallies as JSON, for runs split by case (colorfree bench workers and shards).
+namespace colorfree {
+
+namespace {
+
+// Named fields, so that a field added to ObjectTally cannot shift the others.
+json objectState(const ObjectTally& t) {
+  return {{"proposal_frames", t.proposal_frames}, {"proposals", t.proposals},
+          {"proposal_truths", t.proposal_truths}, {"proposal_hits", t.proposal_hits},
+          {"detector_frames", t.detector_frames}, {"percepts", t.percepts},
+          {"truths", t.truths}, {"detected", t.detected},
+          {"false_positives", t.false_positives}, {"true_positives", t.true_positives},
+          {"should_detect", t.should_detect}, {"position_errors", t.position_errors},
+          {"position_error_sum", t.position_error_sum}, {"position_error_sq", t.position_error_sq}};
+}
+
+void objectFromState(const json& j, ObjectTally& t) {
+  if (j.size() != 14) throw std::runtime_error("object tally: expected 14 fields");
+  t.proposal_frames = j.at("proposal_frames").get<long>();
+  t.proposals = j.at("proposals").get<long>();
+  t.proposal_truths = j.at("proposal_truths").get<long>();
+  t.proposal_hits = j.at("proposal_hits").get<long>();
+  t.detector_frames = j.at("detector_frames").get<long>();
+  t.percepts = j.at("percepts").get<long>();
+  t.truths = j.at("truths").get<long>();
+  t.detected = j.at("detected").get<long>();
+  t.false_positives = j.at("false_positives").get<long>();
+  t.true_positives = j.at("true_positives").get<long>();
+  t.should_detect = j.at("should_detect").get<long>();
+  t.position_errors = j.at("position_errors").get<long>();
+  t.position_error_sum = j.at("position_error_sum").get<double>();
+  t.position_error_sq = j.at("position_error_sq").get<double>();
+}
+
+json rateState(const RateTally& t) { return {t.truths, t.hits, t.percepts, t.false_positives}; }
+RateTally rateFromState(const json& j) {
+  if (j.size() != 4) throw std::runtime_error("rate tally size");
+  return {j.at(0).get<long>(), j.at(1).get<long>(), j.at(2).get<long>(), j.at(3).get<long>()};
+}
+
+json binsState(const std::map<int, BinTally>& bins) {
+  json a = json::array();
+  for (const auto& [k, b] : bins) a.push_back({k, b.truths, b.detected});
+  return a;
+}
+std::map<int, BinTally> binsFromState(const json& j) {
+  std::map<int, BinTally> bins;
+  for (const auto& b : j) bins[b.at(0).get<int>()] = {b.at(1).get<long>(), b.at(2).get<long>()};
+  return bins;
+}
+
+json tallyState(const Tally& t) {
+  json j;
+  j["frames"] = t.frames;
+  j["ball"] = objectState(t.ball);
+  j["robot"] = objectState(t.robot);
+  j["ball_by_distance"] = binsState(t.ball_by_distance);
+  j["robot_by_distance"] = binsState(t.robot_by_distance);
+  j["orientation_frames"] = t.orientation_frames;
+  j["orientation_raw"] = t.orientation_raw;
+  j["orientation_filtered"] = t.orientation_filtered;
+  json heading = json::array();
+  for (const auto& [bin, c] : t.orientation_by_heading) heading.push_back({bin, c.first, c.second});
+  j["orientation_by_heading"] = heading;
+  j["field_frames"] = t.field_frames;
+  j["lines"] = rateState(t.lines);
+  j["intersections"] = rateState(t.intersections);
+  j["circle"] = rateState(t.circle);
+  j["marks"] = rateState(t.marks);
+  j["pose"] = {t.pose_frames, t.pose_fits, t.pose_error_sum_mm, t.pose_error_sq_mm};
+  json timing = json::object();
+  for (const auto& [name, tt] : t.timing) timing[name] = {tt.n, tt.sum, tt.max};
+  j["timing"] = timing;
+  json cls = json::object();
+  for (const auto& [name, c] : t.classifiers) cls[name] = {c.samples, c.correct, c.true_pos, c.false_pos, c.false_neg};
+  j["classifiers"] = cls;
+  return j;
+}
+
+Tally tallyFromState(const json& j) {
+  Tally t;
+  t.frames = j.at("frames").get<long>();
+  objectFromState(j.at("ball"), t.ball);
+  objectFromState(j.at("robot"), t.robot);
+  t.ball_by_distance = binsFromState(j.at("ball_by_distance"));
+  t.robot_by_distance = binsFromState(j.at("robot_by_distance"));
+  t.orientation_frames = j.at("orientation_frames").get<long>();
+  t.orientation_raw = j.at("orientation_raw").get<ClassCounts>();
+  t.orientation_filtered = j.at("orientation_filtered").get<ClassCounts>();
+  for (const auto& h : j.at("orientation_by_heading")) {
+    t.orientation_by_heading[h.at(0).get<int>()] = {h.at(1).get<ClassCounts>(), h.at(2).get<ClassCounts>()};
+  }
+  t.field_frames = j.at("field_frames").get<long>();
+  t.lines = rateFromState(j.at("lines"));
+  t.intersections = rateFromState(j.at("intersections"));
+  t.circle = rateFromState(j.at("circle"));
+  t.marks = rateFromState(j.at("marks"));
+  const json& pose = j.at("pose");
+  t.pose_frames = pose.at(0).get<long>();
+  t.pose_fits = pose.at(1).get<long>();
+  t.pose_error_sum_mm = pose.at(2).get<double>();
+  t.pose_error_sq_mm = pose.at(3).get<double>();
+  for (auto it = j.at("timing").begin(); it != j.at("timing").end(); ++it) {
+    t.timing[it.key()] = {it.value().at(0).get<long>(), it.value().at(1).get<double>(), it.value().at(2).get<double>()};
+  }
+  for (auto it = j.at("classifiers").begin(); it != j.at("classifiers").end(); ++it) {
+    const json& c = it.value();
+    t.classifiers[it.key()] = {c.at(0).get<long>(), c.at(1).get<long>(), c.at(2).get<long>(), c.at(3).get<long>(),
+                               c.at(4).get<long>()};
+  }
+  return t;
+}
+
+void addObject(ObjectTally& a, const ObjectTally& b) {
+  a.proposal_frames += b.proposal_frames;
+  a.proposals += b.proposals;
+  a.proposal_truths += b.proposal_truths;
+  a.proposal_hits += b.proposal_hits;
+  a.detector_frames += b.detector_frames;
+  a.percepts += b.percepts;
+  a.truths += b.truths;
+  a.detected += b.detected;
+  a.false_positives += b.false_positives;
+  a.true_positives += b.true_positives;
+  a.should_detect += b.should_detect;
+  a.position_errors += b.position_errors;
+  a.position_error_sum += b.position_error_sum;
+  a.position_error_sq += b.position_error_sq;
+}
+
+void addRate(RateTally& a, const RateTally& b) {
+  a.truths += b.truths;
+  a.hits += b.hits;
+  a.percepts += b.percepts;
+  a.false_positives += b.false_positives;
+}
+
+void addClasses(ClassCounts& a, const ClassCounts& b) {
+  for (int k = 0; k < kOrientationClassCount; ++k) a[k] += b[k];
+}
+
+void addTally(Tally& a, const Tally& b) {
+  a.frames += b.frames;
+  addObject(a.ball, b.ball);
+  addObject(a.robot, b.robot);
+  for (const auto& [k, v] : b.ball_by_distance) {
+    a.ball_by_distance[k].truths += v.truths;
+    a.ball_by_distance[k].detected += v.detected;
+  }
+  for (const auto& [k, v] : b.robot_by_distance) {
+    a.robot_by_distance[k].truths += v.truths;
+    a.robot_by_distance[k].detected += v.detected;
+  }
+  a.orientation_frames += b.orientation_frames;
+  addClasses(a.orientation_raw, b.orientation_raw);
+  addClasses(a.orientation_filtered, b.orientation_filtered);
+  for (const auto& [k, v] : b.orientation_by_heading) {
+    addClasses(a.orientation_by_heading[k].first, v.first);
+    addClasses(a.orientation_by_heading[k].second, v.second);
+  }
+  a.field_frames += b.field_frames;
+  addRate(a.lines, b.lines);
+  addRate(a.intersections, b.intersections);
+  addRate(a.circle, b.circle);
+  addRate(a.marks, b.marks);
+  a.pose_frames += b.pose_frames;
+  a.pose_fits += b.pose_fits;
+  a.pose_error_sum_mm += b.pose_error_sum_mm;
+  a.pose_error_sq_mm += b.pose_error_sq_mm;
+  for (const auto& [k, v] : b.timing) {
+    auto& t = a.timing[k];
+    t.n += v.n;
+    t.sum += v.sum;
+    t.max = std::max(t.max, v.max);
+  }
+  for (const auto& [k, v] : b.classifiers) {
+    auto& c = a.classifiers[k];
+    c.samples += v.samples;
+    c.correct += v.correct;
+    c.true_pos += v.true_pos;
+    c.false_pos += v.false_pos;
+    c.false_neg += v.false_neg;
+  }
+}
+
+}  // namespace
+
+json Scorer::caseStates() const {
+  json cases = json::array();
+  for (const auto& [info, tally] : state_->cases) {
+    cases.push_back({{"name", info.name},
+                     {"numeric_settings", info.numeric_settings},
+                     {"text_settings", info.text_settings},
+                     {"tally", tallyState(tally)}});
+  }
+  json gallery = json::array();
+  for (const auto& g : state_->gallery) {
+    gallery.push_back({{"kind", g.kind}, {"caption", g.caption}, {"severity", g.severity}, {"frame", g.frame},
+                       {"png_base64", g.png_base64}});
+  }
+  return {{"cases", cases}, {"gallery", gallery}};
+}
+
+void Scorer::addCaseStates(const json& states) {
+  try {
+    for (const auto& c : states.at("cases")) {
+      CaseInfo info;
+      info.name = c.at("name").get<std::string>();
+      info.numeric_settings = c.at("numeric_settings").get<std::map<std::string, double>>();
+      info.text_settings = c.at("text_settings").get<std::map<std::string, std::string>>();
+      state_->cases.push_back({info, tallyFromState(c.at("tally"))});
+    }
+    for (const auto& g : states.at("gallery")) {
+      GalleryItem item;
+      item.kind = g.at("kind").get<std::string>();
+      item.caption = g.at("caption").get<std::string>();
+      item.severity = g.at("severity").get<double>();
+      item.frame = g.at("frame").get<int>();
+      item.png_base64 = g.at("png_base64").get<std::string>();
+      state_->gallery_by_kind[item.kind].push_back(std::move(item));
+    }
+  } catch (const json::exception& e) {
+    throw Error(std::string("scorer case states: ") + e.what());
+  } catch (const std::runtime_error& e) {
+    throw Error(std::string("scorer case states: ") + e.what());
+  }
+  for (auto& [kind, list] : state_->gallery_by_kind) {
+    std::stable_sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.severity > b.severity; });
+    const int limit = kind == "worst_frame" ? params_.gallery_worst_frames : params_.gallery_max_crops;
+    if (static_cast<int>(list.size()) > limit) list.resize(std::max(0, limit));
+  }
+  state_->rebuildGallery();
+  state_->total = Tally{};
+  for (const auto& [info, tally] : state_->cases) addTally(state_->total, tally);
 }
 
 }  // namespace colorfree

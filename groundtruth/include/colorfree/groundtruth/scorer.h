@@ -108,6 +108,14 @@ class Scorer {
   nlohmann::json results(const RunInfo& run) const;
   const std::vector<GalleryItem>& gallery() const;
 
+  /// Every case's tallies and this scorer's gallery as JSON (exact: doubles round-trip), so that
+  /// a run split by case over workers or machines merges into the results of one run.
+  nlohmann::json caseStates() const;
+  /// Appends the cases of caseStates() outputs in the order given, merges their galleries (the
+  /// worst per kind, earlier first on ties) and rebuilds the total as the sum of all cases in
+  /// order. Throws colorfree::Error when `states` is malformed.
+  void addCaseStates(const nlohmann::json& states);
+
  private:
   struct State;
   ScoringParams params_;

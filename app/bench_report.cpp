@@ -1,0 +1,483 @@
+#include "bench_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "colorfree/groundtruth/results.h"
+#include "colorfree/groundtruth/scorer.h"
+
+namespace colorfree::app {
+namespace {
+
+using json = nlohmann::json;
+
+// The paper's figures (REFERENCE.md).
+const std::map<std::string, std::pair<double, double>> kPaperStagesMs = {
+    {"high_contrast", {1.478, 2.755}},   {"field_features", {1.300, 2.909}}, {"robot_proposals", {1.083, 2.692}},
+    {"robot_detector", {0.939, 2.417}},  {"robot_orientation", {1.366, 4.537}},
+    {"ball_proposals", {1.132, 2.506}},  {"ball_detector", {2.452, 6.959}}};
+const std::map<std::string, std::string> kStageTitles = {
+    {"high_contrast", "High contrast regions"}, {"field_features", "Field lines & features"},
+    {"robot_proposals", "Robot proposals"},     {"robot_detector", "Robot detector"},
+    {"robot_orientation", "Robot orientation"}, {"ball_proposals", "Ball proposals"},
+    {"ball_detector", "Ball detector"}};
+
+// The detectors charted against each swept setting: results.json counts (detected, truths) per case.
+struct SweptRate {
+  std::string metric, label, section, detected, truths, ran;
+};
+const std::vector<SweptRate> kSweptRates = {
+    {"ball.detection_rate", "ball", "ball", "detected", "truths", "detector_frames"},
+    {"robot.detection_rate", "robot", "robot", "detected", "truths", "detector_frames"},
+    {"field_features.line_detection_rate", "field lines", "field_features", "lines_detected", "lines_in_view",
+     "frames"},
+    {"field_features.intersection_detection_rate", "L/T/X", "field_features", "intersections_detected",
+     "intersections_in_view", "frames"}};
+
+const json& at(const json& j, const std::string& path) {
+  static const json kNull;
+  const json* n = &j;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t dot = path.find('.', start);
+    const std::string key = path.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
+    if (!n->is_object() || !n->contains(key)) return kNull;
+    n = &(*n)[key];
+    if (dot == std::string::npos) return *n;
+    start = dot + 1;
+  }
+}
+
+std::string fmt(const json& v, int prec = 3, double scale = 1, const char* unit = "") {
+  if (!v.is_number()) return "absent";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f%s", prec, v.get<double>() * scale, unit);
+  return buf;
+}
+
+// A paper figure: "-" where the paper gives none.
+std::string paperFmt(const json& v, int prec = 3) { return v.is_number() ? fmt(v, prec) : "-"; }
+
+std::string esc(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+const json* experimentWithRole(const BenchPlan& plan, const json& experiments, ExperimentRole role, std::string* id) {
+  for (const auto& e : plan.experiments) {
+    if (e.role == role && experiments.contains(e.id)) {
+      if (id) *id = e.id;
+      return &experiments.at(e.id);
+    }
+  }
+  return nullptr;
+}
+
+json orientationSummary(const json& r, const std::string& id, double paper) {
+  json o = {{"experiment", id},
+            {"frames", r.at("frame_count")},
+            {"tolerance_deg", at(r, "orientation.tolerance_deg")},
+            {"robot_frames", at(r, "orientation.robot_frames")},
+            {"raw", json::object()},
+            {"filtered", json::object()},
+            {"paper_perceived", paper}};
+  for (const char* c : {"perceived", "semi_perceived", "not_perceived", "false_positive"}) {
+    o["raw"][c] = at(r, std::string("orientation.") + c);
+    o["filtered"][c] = at(r, std::string("orientation.filtered.") + c);
+  }
+  json per = json::array();
+  for (const auto& bin : at(r, "orientation.per_heading")) {
+    per.push_back({{"heading_deg", bin.at("heading_deg")},
+                   {"robot_frames", bin.at("raw").at("robot_frames")},
+                   {"raw", bin.at("raw")},
+                   {"filtered", bin.at("filtered")}});
+  }
+  o["per_heading"] = per;
+  return o;
+}
+
+json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::string, double>& targets) {
+  // The setting charted: the first numeric setting that takes more than one value.
+  std::string setting;
+  std::map<std::string, std::set<double>> values;
+  for (const auto& c : r.at("cases")) {
+    for (auto it = c.at("settings").begin(); it != c.at("settings").end(); ++it) {
+      if (it.value().is_number()) values[it.key()].insert(it.value().get<double>());
+    }
+  }
+  for (const auto& c : r.at("cases")) {
+    for (auto it = c.at("settings").begin(); it != c.at("settings").end() && setting.empty(); ++it) {
+      if (values[it.key()].size() > 1) setting = it.key();
+    }
+  }
+  json s = {{"experiment", e.id}, {"title", e.title}, {"setting", setting}, {"values", json::array()},
+            {"rates", json::object()}, {"targets", targets}, {"below_target", json::object()}};
+  if (setting.empty()) return s;
+  for (double v : values[setting]) s["values"].push_back(v);
+  for (const auto& sr : kSweptRates) {
+    json rates = json::array();
+    json below = json::array();
+    const bool ran = at(r, sr.section + ".counts." + sr.ran).is_number() &&
+                     at(r, sr.section + ".counts." + sr.ran).get<double>() > 0;
+    for (double v : values[setting]) {
+      long det = 0, tru = 0;
+      for (const auto& c : r.at("cases")) {
+        if (!c.at("settings").contains(setting) || c.at("settings").at(setting).get<double>() != v) continue;
+        det += at(c, sr.section + ".counts." + sr.detected).get<long>();
+        tru += at(c, sr.section + ".counts." + sr.truths).get<long>();
+      }
+      const json rate = ran && tru > 0 ? json(static_cast<double>(det) / tru) : json(nullptr);
+      rates.push_back(rate);
+      const auto t = targets.find(sr.metric);
+      if (t != targets.end() && rate.is_number() && rate.get<double>() < t->second) below.push_back(v);
+    }
+    s["rates"][sr.metric] = rates;
+    s["below_target"][sr.metric] = ran ? below : json(nullptr);
+  }
+  return s;
+}
+
+std::string num(double v, int prec) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", prec, v);
+  return buf;
+}
+
+// A line chart of each detector's rate against the swept setting, with its target dashed.
+std::string sweepChart(const json& s) {
+  const auto& values = s.at("values");
+  if (values.size() < 2) return "";
+  const double w = 620, h = 270, l = 50, r = 190, t = 30, b = 42;
+  double xmin = values.front().get<double>(), xmax = values.back().get<double>();
+  auto X = [&](double x) { return l + (x - xmin) / (xmax - xmin) * (w - l - r); };
+  auto Y = [&](double y) { return t + (1 - y) * (h - t - b); };
+  std::ostringstream o;
+  o << "<svg class=chart width=" << w << " height=" << h << " viewBox='0 0 " << w << " " << h << "'>";
+  o << "<text x=" << l << " y=18 class=ct>" << esc(s.at("title").get<std::string>()) << ": rate against "
+    << esc(s.at("setting").get<std::string>()) << "</text>";
+  for (int k = 0; k <= 4; ++k) {
+    o << "<line x1=" << l << " x2=" << w - r << " y1=" << Y(k / 4.0) << " y2=" << Y(k / 4.0) << " class=grid />";
+    o << "<text x=" << l - 6 << " y=" << Y(k / 4.0) + 4 << " class=ax text-anchor=end>" << num(k / 4.0, 2) << "</text>";
+  }
+  for (const auto& v : values) {
+    o << "<text x=" << X(v.get<double>()) << " y=" << h - b + 16 << " class=ax text-anchor=middle>"
+      << num(v.get<double>(), 2) << "</text>";
+  }
+  o << "<text x=" << (l + w - r) / 2 << " y=" << h - 4 << " class=ax text-anchor=middle>"
+    << esc(s.at("setting").get<std::string>()) << "</text>";
+  const char* colours[] = {"#1f6fd1", "#d6453d", "#2e9d4a", "#8e44ad"};
+  int row = 0;
+  for (const auto& sr : kSweptRates) {
+    const std::string colour = colours[row % 4];
+    const json& rates = s.at("rates").at(sr.metric);
+    std::string path;
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      if (!rates[i].is_number()) continue;
+      const double x = X(values[i].get<double>()), y = Y(rates[i].get<double>());
+      path += (path.empty() ? "M" : " L") + num(x, 1) + "," + num(y, 1);
+      o << "<circle cx=" << x << " cy=" << y << " r=3 fill='" << colour << "' />";
+    }
+    if (!path.empty()) o << "<path d='" << path << "' stroke='" << colour << "' fill=none stroke-width=2 />";
+    const auto tg = s.at("targets").find(sr.metric);
+    std::string label = sr.label;
+    if (tg != s.at("targets").end()) {
+      o << "<line x1=" << l << " x2=" << w - r << " y1=" << Y(tg->get<double>()) << " y2=" << Y(tg->get<double>())
+        << " stroke='" << colour << "' stroke-dasharray='5,4' stroke-width=1 />";
+      label += " (target " + num(tg->get<double>(), 2) + ")";
+    }
+    o << "<rect x=" << w - r + 10 << " y=" << t + row * 18 << " width=12 height=12 fill='" << colour << "' />";
+    o << "<text x=" << w - r + 26 << " y=" << t + row * 18 + 10 << " class=ax>" << esc(label)
+      << (path.empty() ? " absent" : "") << "</text>";
+    ++row;
+  }
+  o << "</svg>";
+  return o.str();
+}
+
+std::string belowText(const json& s, const std::string& metric) {
+  const json& below = at(s, "below_target")[metric];
+  if (!s.at("targets").contains(metric)) return "no target";
+  if (below.is_null()) return "absent";
+  std::ostringstream t;
+  t << (below.empty() ? "never below " : "below ") << num(s.at("targets").at(metric).get<double>(), 2);
+  if (!below.empty()) t << " at";
+  for (const auto& v : below) t << ' ' << num(v.get<double>(), 3);
+  return t.str();
+}
+
+}  // namespace
+
+json benchSummary(const BenchPlan& plan, const json& experiments) {
+  json s;
+  std::string id;
+  if (const json* d = experimentWithRole(plan, experiments, ExperimentRole::kDetection, &id)) {
+    json t = {{"experiment", id}, {"frames", d->at("frame_count")}, {"cases", d->at("cases").size()}};
+    for (const char* obj : {"robot", "ball"}) {
+      for (const char* m : {"proposals_per_frame", "proposal_recall", "detection_rate", "false_positives_per_frame"}) {
+        t[obj][m] = at(*d, std::string(obj) + "." + m);
+      }
+    }
+    t["paper"] = {{"robot", {{"proposals_per_frame", 3.05}, {"proposal_recall", 0.972}, {"detection_rate", 0.949}}},
+                  {"ball", {{"proposals_per_frame", 10.3}, {"proposal_recall", 0.993}, {"detection_rate", 0.971}}}};
+    s["table2"] = t;
+    s["field_features"] = {{"experiment", id},
+                           {"pose_error_mm", at(*d, "field_features.pose_error_mm")},
+                           {"pose_error_rms_mm", at(*d, "field_features.pose_error_rms_mm")},
+                           {"pose_fit_rate", at(*d, "field_features.pose_fit_rate")},
+                           {"line_detection_rate", at(*d, "field_features.line_detection_rate")},
+                           {"intersection_detection_rate", at(*d, "field_features.intersection_detection_rate")},
+                           {"paper_pose_error_mm", 40.07}};
+    json prof = json::array();
+    std::vector<std::string> order = paperStageNames();
+    for (auto it = at(*d, "timing_ms").begin(); it != at(*d, "timing_ms").end(); ++it) {
+      if (std::find(order.begin(), order.end(), it.key()) == order.end()) order.push_back(it.key());
+    }
+    for (const auto& st : order) {
+      const auto p = kPaperStagesMs.find(st);
+      prof.push_back({{"stage", st},
+                      {"mean_ms", at(*d, "timing_ms." + st + ".mean")},
+                      {"max_ms", at(*d, "timing_ms." + st + ".max")},
+                      {"paper_mean_ms", p != kPaperStagesMs.end() ? json(p->second.first) : json(nullptr)},
+                      {"paper_max_ms", p != kPaperStagesMs.end() ? json(p->second.second) : json(nullptr)}});
+    }
+    s["table3"] = {{"experiment", id}, {"stages", prof}};
+  }
+  if (const json* o = experimentWithRole(plan, experiments, ExperimentRole::kOrientationStatic, &id)) {
+    s["orientation_static"] = orientationSummary(*o, id, 0.9988);
+  }
+  if (const json* o = experimentWithRole(plan, experiments, ExperimentRole::kOrientationDynamic, &id)) {
+    s["orientation_dynamic"] = orientationSummary(*o, id, 0.9552);
+  }
+  json sweeps = json::array();
+  for (const auto& e : plan.experiments) {
+    if (e.role == ExperimentRole::kSweep && experiments.contains(e.id)) {
+      sweeps.push_back(sweepSummary(e, experiments.at(e.id), plan.targets));
+    }
+  }
+  s["sweeps"] = sweeps;
+  return s;
+}
+
+void printBenchTables(const json& results) {
+  const json& s = results.at("summary");
+  const json& b = results.at("bench");
+  std::printf("colorfree bench: %s%s, %ld frames, code %s\n", b.at("list").get<std::string>().c_str(),
+              b.at("quick").get<bool>() ? " (--quick)" : "", b.at("frames").get<long>(),
+              b.at("code_version").get<std::string>().c_str());
+  std::printf("(\"absent\": the branch has no such detector yet; ours on MuJoCo renders, the paper's on a real NAO V5)\n");
+  if (s.contains("table2")) {
+    const json& t = s.at("table2");
+    std::printf("\nTable 2: detection set (%s: %ld frames, %ld cases)\n", t.at("experiment").get<std::string>().c_str(),
+                t.at("frames").get<long>(), t.at("cases").get<long>());
+    std::printf("  %-28s %9s %9s %9s %9s\n", "", "robot", "paper", "ball", "paper");
+    const std::vector<std::pair<std::string, std::string>> rows = {{"proposals per frame", "proposals_per_frame"},
+                                                                   {"proposal recall", "proposal_recall"},
+                                                                   {"detection rate", "detection_rate"},
+                                                                   {"false positives per frame", "false_positives_per_frame"}};
+    for (const auto& [label, key] : rows) {
+      const int prec = key == "proposals_per_frame" ? 2 : 3;
+      std::printf("  %-28s %9s %9s %9s %9s\n", label.c_str(), fmt(t.at("robot").at(key), prec).c_str(),
+                  paperFmt(at(t, "paper.robot." + key), prec == 2 ? 2 : 3).c_str(), fmt(t.at("ball").at(key), prec).c_str(),
+                  paperFmt(at(t, "paper.ball." + key), prec == 2 ? 1 : 3).c_str());
+    }
+  }
+  for (const char* which : {"orientation_static", "orientation_dynamic"}) {
+    if (!s.contains(which)) continue;
+    const json& o = s.at(which);
+    std::printf("\nOrientation, %s (%s: tolerance %s deg, %ld robot-frames): classes per true heading\n",
+                std::string(which).substr(12).c_str(), o.at("experiment").get<std::string>().c_str(),
+                fmt(o.at("tolerance_deg"), 2).c_str(), o.at("robot_frames").get<long>());
+    std::printf("  %-9s %6s | %-27s | %-27s\n", "heading", "n", "raw  P / S / N / F %", "filtered  P / S / N / F %");
+    auto classes = [](const json& c) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "%5s %5s %5s %5s", fmt(c.at("perceived"), 0, 100).c_str(),
+                    fmt(c.at("semi_perceived"), 0, 100).c_str(), fmt(c.at("not_perceived"), 0, 100).c_str(),
+                    fmt(c.at("false_positive"), 0, 100).c_str());
+      return std::string(buf);
+    };
+    for (const auto& bin : o.at("per_heading")) {
+      std::printf("  %-9s %6ld | %-27s | %-27s\n", fmt(bin.at("heading_deg"), 1).c_str(), bin.at("robot_frames").get<long>(),
+                  classes(bin.at("raw")).c_str(), classes(bin.at("filtered")).c_str());
+    }
+    std::printf("  %-9s %6ld | %-27s | %-27s\n", "all", o.at("robot_frames").get<long>(), classes(o.at("raw")).c_str(),
+                classes(o.at("filtered")).c_str());
+    std::printf("  perceived: raw %s, filtered %s; paper %s (filtered)\n", fmt(o.at("raw").at("perceived"), 2, 100, " %").c_str(),
+                fmt(o.at("filtered").at("perceived"), 2, 100, " %").c_str(),
+                fmt(o.at("paper_perceived"), 2, 100, " %").c_str());
+  }
+  if (s.contains("field_features")) {
+    const json& f = s.at("field_features");
+    std::printf("\nField features (%s): pose error %s mm (RMS %s mm, fit in %s of frames); paper %s mm\n",
+                f.at("experiment").get<std::string>().c_str(), fmt(f.at("pose_error_mm"), 1).c_str(),
+                fmt(f.at("pose_error_rms_mm"), 1).c_str(), fmt(f.at("pose_fit_rate"), 3).c_str(),
+                fmt(f.at("paper_pose_error_mm"), 2).c_str());
+    std::printf("  line detection rate %s, L/T/X detection rate %s\n", fmt(f.at("line_detection_rate")).c_str(),
+                fmt(f.at("intersection_detection_rate")).c_str());
+  }
+  if (s.contains("table3")) {
+    std::printf("\nTable 3: profiling, ms per frame (ours: this machine while rendering; paper: NAO V5)\n");
+    std::printf("  %-26s %9s %9s %11s %10s\n", "module", "mean", "max", "paper mean", "paper max");
+    for (const auto& st : s.at("table3").at("stages")) {
+      const std::string key = st.at("stage").get<std::string>();
+      const auto title = kStageTitles.find(key);
+      std::printf("  %-26s %9s %9s %11s %10s\n", (title != kStageTitles.end() ? title->second : key).c_str(),
+                  fmt(st.at("mean_ms")).c_str(), fmt(st.at("max_ms")).c_str(), paperFmt(st.at("paper_mean_ms")).c_str(),
+                  paperFmt(st.at("paper_max_ms")).c_str());
+    }
+  }
+  if (results.contains("cnn_table") && !results.at("cnn_table").empty()) {
+    std::printf("\nTable 1: CNN classifiers (time: this machine, one core, median)\n");
+    std::printf("  %-13s %-8s %15s %10s %10s %9s %-17s %6s\n", "net", "input", "params (paper)", "us single",
+                "us batch16", "paper ms", "accuracy", "paper");
+    for (const auto& r : results.at("cnn_table")) {
+      const std::string params = std::to_string(r.at("parameters").get<long>()) + " (" +
+                                 std::to_string(r.at("paper_parameters").get<long>()) + ")";
+      std::printf("  %-13s %-8s %15s %10.2f %10.2f %9.3f %-17s %6.3f\n", r.at("net").get<std::string>().c_str(),
+                  r.at("input").get<std::string>().c_str(), params.c_str(), r.at("us_per_patch_single").get<double>(),
+                  r.at("us_per_patch_batch16").get<double>(), r.at("paper_time_ms").get<double>(),
+                  r.at("accuracy").get<std::string>().c_str(), r.at("paper_accuracy").get<double>());
+    }
+  }
+  if (s.contains("sweeps") && !s.at("sweeps").empty()) {
+    std::printf("\nSweeps: detection rate per setting value (targets:");
+    for (auto it = b.at("targets").begin(); it != b.at("targets").end(); ++it) {
+      std::printf(" %s %s", it.key().c_str(), fmt(it.value(), 2).c_str());
+    }
+    std::printf(")\n");
+    for (const auto& sw : s.at("sweeps")) {
+      std::printf("  %s (%s):\n    %-12s", sw.at("experiment").get<std::string>().c_str(),
+                  sw.at("setting").get<std::string>().c_str(), "value");
+      for (const auto& v : sw.at("values")) std::printf(" %7s", fmt(v, 2).c_str());
+      std::printf("\n");
+      for (const auto& sr : kSweptRates) {
+        std::printf("    %-12s", sr.label.c_str());
+        for (const auto& v : sw.at("rates").at(sr.metric)) std::printf(" %7s", fmt(v, 2).c_str());
+        std::printf("   %s\n", belowText(sw, sr.metric).c_str());
+      }
+    }
+  }
+}
+
+std::string reportBody(const std::string& html) {
+  const auto start = html.find("<body>");
+  const auto end = html.rfind("</body>");
+  std::string body = start == std::string::npos || end == std::string::npos ? html : html.substr(start + 6, end - start - 6);
+  // The experiment's page title becomes a sub-heading of the bench page.
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"<h3>", "<h4>"}, {"</h3>", "</h4>"}, {"<h2>", "<h3>"}, {"</h2>", "</h3>"}, {"<h1>", "<h3>"}, {"</h1>", "</h3>"}}) {
+    for (auto p = body.find(from); p != std::string::npos; p = body.find(from, p + to.size())) body.replace(p, from.size(), to);
+  }
+  return body;
+}
+
+std::string renderBenchHtml(const json& results, const std::vector<std::string>& experiment_sections) {
+  const json& s = results.at("summary");
+  const json& b = results.at("bench");
+  std::ostringstream h;
+  h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>colorfree bench</title><style>"
+       "body{font:14px/1.4 sans-serif;margin:20px;max-width:1150px;color:#222}"
+       "table{border-collapse:collapse;margin:8px 0 16px}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
+       "th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
+       ".paper{color:#555;background:#fafafa}.absent{color:#b00;font-style:italic}.na{color:#777}"
+       ".ok{color:#080}.fail{color:#b00;font-weight:bold}.chart{border:1px solid #ddd;margin:4px}"
+       ".ct{font:bold 13px sans-serif}.ax{font:11px sans-serif;fill:#333}.grid{stroke:#e4e4e4}"
+       ".gal{display:flex;flex-wrap:wrap;gap:8px}.gal figure{margin:0;width:170px;font-size:11px}"
+       ".gal figure.wide{width:490px}.gal img{border:1px solid #999;image-rendering:pixelated;max-width:100%}"
+       "section{border-top:3px solid #888;margin-top:30px}code{background:#f4f4f4}</style></head><body>";
+  h << "<h1>colorfree bench</h1><p>" << esc(b.at("list").get<std::string>()) << (b.at("quick").get<bool>() ? " (--quick)" : "")
+    << " &middot; " << b.at("frames") << " frames &middot; code " << esc(b.at("code_version").get<std::string>())
+    << ". Ours on MuJoCo renders; the paper's on a real NAO V5. <span class=absent>absent</span> = the code has no "
+       "such detector yet (never shown as 0).</p>";
+  auto cell = [](const json& v, int prec = 3, double scale = 1, const char* unit = "") {
+    return v.is_number() ? fmt(v, prec, scale, unit) : std::string("<span class=absent>absent</span>");
+  };
+  h << "<h2>Contents</h2><ul><li><a href='#summary'>The paper's tables, ours beside</a></li><li><a href='#sweeps'>Sweeps</a></li>";
+  for (auto it = results.at("experiments").begin(); it != results.at("experiments").end(); ++it) {
+    h << "<li><a href='#" << esc(it.key()) << "'>" << esc(it.key()) << "</a>: "
+      << esc(at(it.value(), "bench.title").get<std::string>()) << "</li>";
+  }
+  h << "</ul><h2 id=summary>Table 2: detection set</h2>";
+  if (s.contains("table2")) {
+    const json& t = s.at("table2");
+    h << "<p>" << esc(t.at("experiment").get<std::string>()) << ": " << t.at("frames") << " frames, " << t.at("cases")
+      << " cases.</p><table><tr><th>metric</th><th>robot, ours</th><th class=paper>robot, paper</th><th>ball, ours</th>"
+         "<th class=paper>ball, paper</th></tr>";
+    for (const auto& [label, key] : std::vector<std::pair<std::string, std::string>>{
+             {"avg. proposals per frame", "proposals_per_frame"}, {"proposal recall", "proposal_recall"},
+             {"overall detection rate", "detection_rate"}, {"false positives per frame", "false_positives_per_frame"}}) {
+      h << "<tr><td>" << label << "</td><td>" << cell(t.at("robot").at(key)) << "</td><td class=paper>"
+        << (at(t, "paper.robot." + key).is_number() ? fmt(at(t, "paper.robot." + key)) : "&ndash;") << "</td><td>"
+        << cell(t.at("ball").at(key)) << "</td><td class=paper>"
+        << (at(t, "paper.ball." + key).is_number() ? fmt(at(t, "paper.ball." + key)) : "&ndash;") << "</td></tr>";
+    }
+    h << "</table>";
+  }
+  h << "<h2>Orientation (paper's Figs. 5 and 6)</h2><table><tr><th>experiment</th><th>tolerance deg</th>"
+       "<th>robot-frames</th><th>perceived, raw</th><th>perceived, filtered</th><th class=paper>paper (filtered)</th></tr>";
+  for (const char* which : {"orientation_static", "orientation_dynamic"}) {
+    if (!s.contains(which)) continue;
+    const json& o = s.at(which);
+    h << "<tr><td>" << which << "</td><td>" << fmt(o.at("tolerance_deg"), 2) << "</td><td>" << o.at("robot_frames")
+      << "</td><td>" << cell(o.at("raw").at("perceived"), 2, 100, " %") << "</td><td>"
+      << cell(o.at("filtered").at("perceived"), 2, 100, " %") << "</td><td class=paper>"
+      << fmt(o.at("paper_perceived"), 2, 100, " %") << "</td></tr>";
+  }
+  h << "</table><p>The charts of classes per true heading are in each orientation experiment's section below.</p>";
+  if (s.contains("field_features")) {
+    const json& f = s.at("field_features");
+    h << "<h2>Field features</h2><table><tr><th>metric</th><th>ours</th><th class=paper>paper</th></tr><tr><td>pose "
+         "error from field features, mean (mm)</td><td>"
+      << cell(f.at("pose_error_mm"), 1) << "</td><td class=paper>40.07</td></tr><tr><td>RMS (mm)</td><td>"
+      << cell(f.at("pose_error_rms_mm"), 1) << "</td><td class=paper>&ndash;</td></tr><tr><td>frames with a fit</td><td>"
+      << cell(f.at("pose_fit_rate")) << "</td><td class=paper>&ndash;</td></tr></table>";
+  }
+  if (s.contains("table3")) {
+    h << "<h2>Table 3: profiling</h2><p>Ours: this machine, while rendering in parallel; paper: NAO V5.</p><table><tr>"
+         "<th>module</th><th>mean ms</th><th>max ms</th><th class=paper>paper mean</th><th class=paper>paper max</th></tr>";
+    for (const auto& st : s.at("table3").at("stages")) {
+      const std::string key = st.at("stage").get<std::string>();
+      const auto title = kStageTitles.find(key);
+      h << "<tr><td>" << esc(title != kStageTitles.end() ? title->second : key) << "</td><td>" << cell(st.at("mean_ms"))
+        << "</td><td>" << cell(st.at("max_ms")) << "</td><td class=paper>"
+        << (st.at("paper_mean_ms").is_number() ? fmt(st.at("paper_mean_ms")) : "&ndash;") << "</td><td class=paper>"
+        << (st.at("paper_max_ms").is_number() ? fmt(st.at("paper_max_ms")) : "&ndash;") << "</td></tr>";
+    }
+    h << "</table>";
+  }
+  h << "<h2>Table 1: CNN classifiers</h2><table><tr><th>net</th><th>input</th><th>parameters</th><th class=paper>paper "
+       "parameters</th><th>&micro;s/patch single</th><th>&micro;s/patch batch 16</th><th class=paper>paper ms</th>"
+       "<th>accuracy</th><th class=paper>paper accuracy</th></tr>";
+  for (const auto& r : results.at("cnn_table")) {
+    h << "<tr><td>" << esc(r.at("net").get<std::string>()) << "</td><td>" << esc(r.at("input").get<std::string>())
+      << "</td><td>" << r.at("parameters") << "</td><td class=paper>" << r.at("paper_parameters") << "</td><td>"
+      << fmt(r.at("us_per_patch_single"), 2) << "</td><td>" << fmt(r.at("us_per_patch_batch16"), 2)
+      << "</td><td class=paper>" << fmt(r.at("paper_time_ms")) << "</td><td>" << esc(r.at("accuracy").get<std::string>())
+      << "</td><td class=paper>" << fmt(r.at("paper_accuracy")) << "</td></tr>";
+  }
+  h << "</table><h2 id=sweeps>Sweeps: where each detector falls below its target</h2>";
+  for (const auto& sw : s.at("sweeps")) {
+    h << sweepChart(sw) << "<ul>";
+    for (const auto& sr : kSweptRates) {
+      h << "<li>" << esc(sr.label) << ": " << esc(belowText(sw, sr.metric)) << "</li>";
+    }
+    h << "</ul>";
+  }
+  for (const auto& sec : experiment_sections) h << sec;
+  h << "</body></html>\n";
+  return h.str();
+}
+
+}  // namespace colorfree::app

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# colorfree bench: shards 0/3, 1/3, 2/3 merged give the same results.json as one unsharded run
+# (with two worker processes), leaving out only the wall-clock timing fields; a missing shard is
+# an error that names the missing item.
+set -u
+bin="$1"; compare="$2"; here="$3"; out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+list="$here/bench_small.yaml"
+
+"$bin" bench --list "$list" --jobs 2 --out "$out/whole" >"$out/whole.log" 2>&1 || fail "unsharded run: $(cat "$out/whole.log")"
+for i in 0 1 2; do
+  "$bin" bench --list "$list" --shard "$i/3" --out "$out/s$i" >"$out/s$i.log" 2>&1 || fail "shard $i/3: $(cat "$out/s$i.log")"
+  [ -s "$out/s$i/shard_${i}_of_3.json" ] || fail "shard $i/3 wrote no shard file"
+  [ ! -e "$out/s$i/results.json" ] || fail "a shard wrote a results.json that looks complete"
+done
+"$bin" merge "$out/s0" "$out/s1" "$out/s2" --out "$out/merged" >"$out/merge.log" 2>&1 || fail "merge: $(cat "$out/merge.log")"
+[ -s "$out/merged/report.html" ] || fail "merge wrote no report.html"
+"$compare" "$out/whole/results.json" "$out/merged/results.json" || fail "sharded and unsharded results differ"
+grep -q '"frames": 11' "$out/merged/results.json" || fail "merged results do not count 11 frames"
+
+"$bin" merge "$out/s0" "$out/s2" --out "$out/partial" >"$out/partial.log" 2>&1
+rc=$?
+[ "$rc" -eq 2 ] || fail "merge with a missing shard: exit $rc, expected 2"
+grep -q "is missing" "$out/partial.log" || fail "missing shard not named: $(cat "$out/partial.log")"
+[ ! -e "$out/partial/results.json" ] || fail "results.json written from a partial set of shards"
+echo "ok"
