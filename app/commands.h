@@ -13,6 +13,7 @@ void addRenderCommand(CLI::App& app, int& exit_code);
 
 // `train` (a tiny CNN on a folder of patches) and `cnn-table` (the paper's Table 1 for our nets).
 void addTrainCommand(CLI::App& app, int& exit_code);
+void addRunCommand(CLI::App& app, int& exit_code);
 void addDetectCommand(CLI::App& app, int& exit_code);
 
 }  // namespace colorfree::app

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   (void)exit_code;
   colorfree::app::addRenderCommand(app, exit_code);
   colorfree::app::addTrainCommand(app, exit_code);
+  colorfree::app::addRunCommand(app, exit_code);
   colorfree::app::addDetectCommand(app, exit_code);
   try {
     app.parse(argc, argv);

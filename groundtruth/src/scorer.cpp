@@ -264,7 +264,7 @@ struct Scorer::State {
 };
 
 Scorer::Scorer(ScoringParams params, FieldDimensions dims)
-    : params_(params), dims_(dims), field_(FieldModel::fromDimensions(dims)),
+    : params_(params), dims_(dims), field_(FieldMarkings::fromDimensions(dims)),
       state_(std::make_unique<State>()) {}
 Scorer::~Scorer() = default;
 Scorer::Scorer(Scorer&&) noexcept = default;

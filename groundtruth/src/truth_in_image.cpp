@@ -71,37 +71,49 @@ PixelBox clipBox(PixelBox b, double w, double h) {
   return b;
 }
 
-// The 8 corners of an upright box on the ground under a robot, field frame.
-std::vector<Eigen::Vector3d> bodyCorners(const FieldPose& pose, double depth, double width,
+// Seen from above, the NAO's outline (arms, legs, feet in stride) is close to an ellipse: a box
+// of the same size overstates its width seen diagonally by about a third (measured on renders).
+constexpr double kFootprintExponent = 2.0;
+constexpr int kFootprintPoints = 24;
+
+// Points of an upright prism with that footprint under a robot, at the ground and at `height`,
+// field frame; bottom ring first.
+std::vector<Eigen::Vector3d> bodyOutline(const FieldPose& pose, double depth, double width,
                                          double height) {
   const Eigen::Vector2d f(std::cos(pose.heading_rad), std::sin(pose.heading_rad));
   const Eigen::Vector2d l(-f.y(), f.x());
   const Eigen::Vector2d c(pose.x_m, pose.y_m);
   std::vector<Eigen::Vector3d> out;
   for (double z : {0.0, height}) {
-    for (double sf : {-0.5, 0.5}) {
-      for (double sl : {-0.5, 0.5}) {
-        const Eigen::Vector2d g = c + sf * depth * f + sl * width * l;
-        out.emplace_back(g.x(), g.y(), z);
-      }
+    for (int k = 0; k < kFootprintPoints; ++k) {
+      const double t = 2 * kPi * k / kFootprintPoints;
+      auto se = [](double v) {
+        return std::copysign(std::pow(std::abs(v), 2.0 / kFootprintExponent), v);
+      };
+      const Eigen::Vector2d g = c + se(std::cos(t)) * depth / 2 * f + se(std::sin(t)) * width / 2 * l;
+      out.emplace_back(g.x(), g.y(), z);
     }
   }
   return out;
 }
 
-// All points of the box's 12 edges that are in front of the camera, projected.
-std::vector<Eigen::Vector2d> projectBoxEdges(const FrameProjector& proj,
-                                             const std::vector<Eigen::Vector3d>& c) {
-  static const int kEdges[12][2] = {{0, 1}, {1, 3}, {3, 2}, {2, 0}, {4, 5}, {5, 7},
-                                    {7, 6}, {6, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
-  std::vector<Eigen::Vector2d> pts;
-  for (const auto& e : kEdges) {
-    if (auto s = proj.segmentUnclipped(c[e[0]], c[e[1]])) {
-      pts.push_back(s->first);
-      pts.push_back(s->second);
+// The prism's edges (rings and verticals), cut at the near plane and projected.
+std::vector<Eigen::Vector2d> projectOutline(const FrameProjector& proj,
+                                            const std::vector<Eigen::Vector3d>& pts) {
+  std::vector<Eigen::Vector2d> out;
+  auto add = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    if (auto s = proj.segmentUnclipped(a, b)) {
+      out.push_back(s->first);
+      out.push_back(s->second);
     }
+  };
+  const int n = kFootprintPoints;
+  for (int k = 0; k < n; ++k) {
+    add(pts[k], pts[(k + 1) % n]);
+    add(pts[n + k], pts[n + (k + 1) % n]);
+    add(pts[k], pts[n + k]);
   }
-  return pts;
+  return out;
 }
 
 }  // namespace
@@ -332,12 +344,11 @@ RobotInImage robotInImage(const WorldState& w, std::size_t i, const FrameProject
   r.side_seen = sideSeen(r.heading_rel_rad);
   r.heading_in_observer_rad = wrapAngle(t.pose.heading_rad - w.observer.heading_rad);
 
-  const auto corners =
-      bodyCorners(t.pose, params.robot_depth_m, dims.robot_width_m, dims.robot_height_m);
-  const auto pts = projectBoxEdges(proj, corners);
+  const auto pts = projectOutline(
+      proj, bodyOutline(t.pose, params.robot_depth_m, dims.robot_width_m, dims.robot_height_m));
   if (pts.empty()) return r;
-  const auto feet_pts = projectBoxEdges(
-      proj, bodyCorners(t.pose, params.robot_depth_m, dims.robot_width_m,
+  const auto feet_pts = projectOutline(
+      proj, bodyOutline(t.pose, params.robot_depth_m, dims.robot_width_m,
                         params.robot_feet_region_height_m));
   const double W = proj.width(), H = proj.height();
   const PixelBox full = boxOf(pts);
@@ -407,7 +418,7 @@ double visibleLength(const ObjectMap& map, bool use_map, const Eigen::Vector2d& 
 }
 
 FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool use_map,
-                          const FieldModel& model, const ScoringParams& params) {
+                          const FieldMarkings& model, const ScoringParams& params) {
   FieldInImage f;
   const int win = params.feature_visibility_window_px;
   for (const auto& line : model.lines) {
@@ -450,7 +461,7 @@ FieldInImage fieldInImage(const WorldState& w, const FrameProjector& proj, bool 
 
 }  // namespace
 
-FrameTruth computeFrameTruth(const WorldState& world, const FieldModel& field,
+FrameTruth computeFrameTruth(const WorldState& world, const FieldMarkings& field,
                              const FieldDimensions& dims, const ScoringParams& params) {
   FrameTruth t;
   t.frame_index = world.frame_index;

@@ -35,6 +35,7 @@ FieldLineParams FieldLineParams::load(const std::string& path) {
   p.merge_max_gap_m = f.getInRange("merge_max_gap_m", 0, 10);
   p.min_line_length_m = f.getInRange("min_line_length_m", 0, 10);
   p.min_line_spots = static_cast<int>(f.getInRange("min_line_spots", 2, 1000));
+  p.extend_max_gap_m = f.getInRange("extend_max_gap_m", 0, 2);
   p.width_trend_min_range = f.getInRange("width_trend_min_range", 1, 100);
   p.min_width_trend = f.getInRange("min_width_trend", -10, 10);
   p.circle_radius_tolerance_m = f.getInRange("circle_radius_tolerance_m", 0, 1);
@@ -554,6 +555,32 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     }
   }
 
+  // Spots lost when a chain was split at a corner, or on short pieces, join the line they lie on
+  // (a spot at a corner may serve both lines).
+  for (auto& pc : pieces) {
+    if (!pc.alive) continue;
+    const Fit& f = pc.fit;
+    const Eigen::Vector2d normal(-f.direction.y(), f.direction.x());
+    const double tol = tolerance(f);
+    std::vector<char> own(out.spots.size(), 0);
+    for (int id : pc.ids) own[id] = 1;
+    std::vector<int> ids = pc.ids;
+    for (int id = 0; id < static_cast<int>(out.spots.size()); ++id) {
+      if (own[id] || on_circle[id]) continue;
+      const Eigen::Vector2d d = out.spots[id].position_in_robot - f.centroid;
+      const double t = d.dot(f.direction);
+      if (std::abs(d.dot(normal)) <= tol && t >= f.t_min - p.extend_max_gap_m && t <= f.t_max + p.extend_max_gap_m) {
+        ids.push_back(id);
+      }
+    }
+    if (ids.size() == pc.ids.size()) continue;
+    const Fit grown = fitLine(out.spots, ids);
+    if (grown.max_residual <= tolerance(grown)) {
+      pc.ids = std::move(ids);
+      pc.fit = grown;
+    }
+  }
+
   std::vector<char> on_line(out.spots.size(), 0);
   for (const auto& pc : pieces) {
     if (!pc.alive) continue;
@@ -693,6 +720,13 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
       }
     }
     if (static_cast<int>(cluster.size()) < p.min_penalty_mark_spots) continue;
+    // A cross is crossed by both vertical and horizontal scan lines.
+    bool vertical = false, horizontal = false;
+    for (int id : cluster) (out.spots[id].vertical_scan ? vertical : horizontal) = true;
+    if (!vertical || !horizontal) {
+      for (int id : cluster) used[id] = 1;
+      continue;
+    }
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int id : cluster) centre += out.spots[id].position_in_robot;
     centre /= static_cast<double>(cluster.size());

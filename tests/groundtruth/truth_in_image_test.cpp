@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "colorfree/groundtruth/field_model.h"
+#include "colorfree/groundtruth/field_markings.h"
 #include "test_support.h"
 
 namespace colorfree {
@@ -41,8 +41,8 @@ ObjectMap emptyMap(int w, int h) {
   return m;
 }
 
-TEST(FieldModel, HasTheSplMarkings) {
-  const FieldModel m = FieldModel::fromDimensions(FieldDimensions{});
+TEST(FieldMarkings, HasTheSplMarkings) {
+  const FieldMarkings m = FieldMarkings::fromDimensions(FieldDimensions{});
   EXPECT_EQ(m.lines.size(), 17u);
   int l = 0, t = 0, x = 0;
   for (const auto& i : m.intersections) {
@@ -69,7 +69,7 @@ TEST(TruthInImage, BallOnTheOpticalAxisHasTheConeRadius) {
   WorldState s = makeWorld({0, 0, 0}, 0.05, 0);
   s.ball.present = true;
   s.ball.position_m = {2.0, 0, 0.05};
-  const auto t = computeFrameTruth(s, FieldModel::fromDimensions({}), {}, ScoringParams{});
+  const auto t = computeFrameTruth(s, FieldMarkings::fromDimensions({}), {}, ScoringParams{});
   ASSERT_TRUE(t.ball.in_view);
   const auto& k = s.camera.model.intrinsics();
   EXPECT_NEAR(t.ball.centre_px.x(), k.center_x_px, 1e-6);
@@ -84,12 +84,12 @@ TEST(TruthInImage, BallCutByTheBorderAndOccludedInTheObjectMap) {
   WorldState s = makeWorld({0, 0, 0}, 0.5, 0.3);
   s.ball.present = true;
   s.ball.position_m = {1.5, 0.2, 0.05};
-  auto t = computeFrameTruth(s, FieldModel::fromDimensions({}), {}, ScoringParams{});
+  auto t = computeFrameTruth(s, FieldMarkings::fromDimensions({}), {}, ScoringParams{});
   ASSERT_TRUE(t.ball.in_view);
   // A map with the ball's disc drawn: almost all of it visible.
   s.object_map = emptyMap(320, 240);
   fillDisc(s.object_map, t.ball.centre_px, t.ball.radius_px - 0.5, kObjectBall);
-  t = computeFrameTruth(s, FieldModel::fromDimensions({}), {}, ScoringParams{});
+  t = computeFrameTruth(s, FieldMarkings::fromDimensions({}), {}, ScoringParams{});
   EXPECT_GT(t.ball.visible_fraction, 0.85);
   EXPECT_TRUE(t.ball.should_detect);
   // A robot in front of its right 70 %: not visible enough any more.
@@ -98,7 +98,7 @@ TEST(TruthInImage, BallCutByTheBorderAndOccludedInTheObjectMap) {
       if (x + 0.5 > t.ball.centre_px.x() - 0.4 * t.ball.radius_px) s.object_map.labels[y * 320 + x] = kObjectRobotBase;
     }
   }
-  t = computeFrameTruth(s, FieldModel::fromDimensions({}), {}, ScoringParams{});
+  t = computeFrameTruth(s, FieldMarkings::fromDimensions({}), {}, ScoringParams{});
   EXPECT_LT(t.ball.visible_fraction, 0.4);
   EXPECT_FALSE(t.ball.should_detect);
 
@@ -107,7 +107,7 @@ TEST(TruthInImage, BallCutByTheBorderAndOccludedInTheObjectMap) {
   e.ball.present = true;
   const double half_fov = e.camera.model.intrinsics().horizontalFov() / 2;
   e.ball.position_m = {2.0 * std::cos(half_fov), 2.0 * std::sin(half_fov), 0.05};
-  t = computeFrameTruth(e, FieldModel::fromDimensions({}), {}, ScoringParams{});
+  t = computeFrameTruth(e, FieldMarkings::fromDimensions({}), {}, ScoringParams{});
   ASSERT_TRUE(t.ball.in_view);
   EXPECT_NEAR(t.ball.centre_px.x(), 0.0, 0.5);
   EXPECT_NEAR(t.ball.visible_fraction, 0.5, 0.03);
@@ -117,14 +117,14 @@ TEST(TruthInImage, BallBehindTheCameraIsNotInView) {
   WorldState s = makeWorld({0, 0, 0}, 0.5, 0.3);
   s.ball.present = true;
   s.ball.position_m = {-1.0, 0, 0.05};
-  const auto t = computeFrameTruth(s, FieldModel::fromDimensions({}), {}, ScoringParams{});
+  const auto t = computeFrameTruth(s, FieldMarkings::fromDimensions({}), {}, ScoringParams{});
   EXPECT_FALSE(t.ball.in_view);
   EXPECT_FALSE(t.ball.should_detect);
 }
 
 TEST(TruthInImage, RobotHeadingRelativeToTheLineOfSight) {
   WorldState s = makeWorld({0, 0, 0}, 0.5, 0.2);
-  const FieldModel field = FieldModel::fromDimensions({});
+  const FieldMarkings field = FieldMarkings::fromDimensions({});
   auto relFor = [&](double heading) {
     s.robots = {RobotTruth{}};
     s.robots[0].pose = {2.0, 0.0, heading};
@@ -152,7 +152,7 @@ TEST(TruthInImage, RobotBoxBoundsItsProjectedBody) {
   s.robots[0].pose = {1.5, 0.1, 1.0};
   const FieldDimensions dims;
   const ScoringParams p;
-  const auto r = computeFrameTruth(s, FieldModel::fromDimensions(dims), dims, p).robots[0];
+  const auto r = computeFrameTruth(s, FieldMarkings::fromDimensions(dims), dims, p).robots[0];
   ASSERT_TRUE(r.in_view);
   EXPECT_TRUE(r.should_detect);
   // The ground point and the head's centre lie inside the box; the feet box is its lower part.
@@ -178,7 +178,7 @@ TEST(TruthInImage, RobotVisibleFractionCountsNearerOccluders) {
   s.robots[1].pose = {1.0, 0.0, 0};  // nearer, in front of robot 0
   s.robots[1].index = 1;
   const FieldDimensions dims;
-  const FieldModel field = FieldModel::fromDimensions(dims);
+  const FieldMarkings field = FieldMarkings::fromDimensions(dims);
   auto t = computeFrameTruth(s, field, dims, ScoringParams{});
   s.object_map = emptyMap(320, 240);
   // Paint robot 0's box, then robot 1's over it (nearer hides farther).
@@ -199,7 +199,7 @@ TEST(TruthInImage, LinesAreClippedToTheViewAndBehindTheCamera) {
   // 1.5 m from the left touch line, looking along +x: that line runs from behind the camera to
   // far ahead.
   WorldState s = makeWorld({0, 1.5, 0}, 0.5, 0.3);
-  const FieldModel field = FieldModel::fromDimensions({});
+  const FieldMarkings field = FieldMarkings::fromDimensions({});
   auto t = computeFrameTruth(s, field, {}, ScoringParams{});
   ASSERT_FALSE(t.field.lines.empty());
   const double w = 320, h = 240;
@@ -246,7 +246,7 @@ TEST(TruthInImage, LinesAreClippedToTheViewAndBehindTheCamera) {
 TEST(TruthInImage, IntersectionsAndMarksInViewNeedLinePixels) {
   // Look at the opponent penalty area from its front, 2 m away.
   WorldState s = makeWorld({0.85, 0, 0}, 0.5, 0.15);
-  const FieldModel field = FieldModel::fromDimensions({});
+  const FieldMarkings field = FieldMarkings::fromDimensions({});
   auto t = computeFrameTruth(s, field, {}, ScoringParams{});
   ASSERT_FALSE(t.field.penalty_marks.empty());
   ASSERT_FALSE(t.field.intersections.empty());

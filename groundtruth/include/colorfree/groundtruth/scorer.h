@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "colorfree/groundtruth/field_model.h"
+#include "colorfree/groundtruth/field_markings.h"
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/groundtruth/truth_in_image.h"
 #include "colorfree/groundtruth/world_state.h"
@@ -111,7 +111,7 @@ class Scorer {
   struct State;
   ScoringParams params_;
   FieldDimensions dims_;
-  FieldModel field_;
+  FieldMarkings field_;
   std::unique_ptr<State> state_;
 };
 

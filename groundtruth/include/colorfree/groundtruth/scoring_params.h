@@ -17,7 +17,7 @@ struct ScoringParams {
   double robot_max_distance_m = 6.0;
   double robot_min_height_px = 12.0;  ///< projected whole-body box height
   // Robot body model (width and height from FieldDimensions).
-  double robot_depth_m = 0.275;
+  double robot_depth_m = 0.21;  ///< side view with arms and stride; the outline is an ellipse
   double robot_feet_region_height_m = 0.12;
   double foot_lateral_offset_m = 0.05;
   // Matching.

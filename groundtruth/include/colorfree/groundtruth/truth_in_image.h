@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "colorfree/groundtruth/field_model.h"
+#include "colorfree/groundtruth/field_markings.h"
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/groundtruth/world_state.h"
 #include "colorfree/perception/percepts.h"
@@ -111,7 +111,7 @@ struct FrameTruth {
 
 /// Computes the truth in the image from a world state. The object map may be empty: then
 /// visibility counts only the image border (and the visible fractions assume no occlusion).
-FrameTruth computeFrameTruth(const WorldState& world, const FieldModel& field,
+FrameTruth computeFrameTruth(const WorldState& world, const FieldMarkings& field,
                              const FieldDimensions& dims, const ScoringParams& params);
 
 /// Angle wrapped into (-π, π].

@@ -24,14 +24,14 @@ struct FieldIntersection {
 
 /// The SPL field's markings built from FieldDimensions only: lines, the centre circle, the
 /// L/T/X intersections and the penalty marks, field frame (origin centre, x to the opponent goal).
-struct FieldModel {
+struct FieldMarkings {
   std::vector<FieldLineSegment> lines;
   Eigen::Vector2d centre_circle_centre = Eigen::Vector2d::Zero();
   double centre_circle_radius_m = 0.75;
   std::vector<FieldIntersection> intersections;
   std::vector<Eigen::Vector2d> penalty_marks;
 
-  static FieldModel fromDimensions(const FieldDimensions& d);
+  static FieldMarkings fromDimensions(const FieldDimensions& d);
 };
 
 const char* intersectionTypeName(IntersectionType type);

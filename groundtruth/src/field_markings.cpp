@@ -1,9 +1,9 @@
-#include "colorfree/groundtruth/field_model.h"
+#include "colorfree/groundtruth/field_markings.h"
 
 namespace colorfree {
 
-FieldModel FieldModel::fromDimensions(const FieldDimensions& d) {
-  FieldModel m;
+FieldMarkings FieldMarkings::fromDimensions(const FieldDimensions& d) {
+  FieldMarkings m;
   const double hl = d.halfLength();
   const double hw = d.halfWidth();
   const double pa_x = hl - d.penalty_area_length_m;
