@@ -15,5 +15,7 @@ void addRenderCommand(CLI::App& app, int& exit_code);
 void addTrainCommand(CLI::App& app, int& exit_code);
 void addRunCommand(CLI::App& app, int& exit_code);
 void addDetectCommand(CLI::App& app, int& exit_code);
+// `learn` (active learning of a kind's nets in the simulator).
+void addLearnCommand(CLI::App& app, int& exit_code);
 
 }  // namespace colorfree::app

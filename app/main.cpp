@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   colorfree::app::addTrainCommand(app, exit_code);
   colorfree::app::addRunCommand(app, exit_code);
   colorfree::app::addDetectCommand(app, exit_code);
+  colorfree::app::addLearnCommand(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

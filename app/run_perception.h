@@ -1,5 +1,7 @@
 #pragma once
 
+#include <memory>
+
 #include "colorfree/groundtruth/scorer.h"
 #include "colorfree/perception/camera_model.h"
 #include "colorfree/perception/image.h"
@@ -12,6 +14,10 @@ class PerceptionRunner {
  public:
   PerceptionRunner();
   FramePercepts process(const GrayImage& image, const CameraModel& camera);
+
+ private:
+  struct Impl;
+  std::shared_ptr<Impl> impl_;
 };
 
 }  // namespace colorfree::app
