@@ -22,9 +22,12 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.per_window_count = static_cast<int>(f.getInRange("per_window_count", 1, 16));
   p.nms_fraction = f.getInRange("nms_fraction", 0, 10);
   p.max_count = static_cast<int>(f.getInRange("max_count", 1, 1000));
+  p.line_count = static_cast<int>(f.getInRange("line_count", 0, 1000));
+  p.line_min_response = f.getInRange("line_min_response", -255, 255);
   p.feet_region_diameters = f.getInRange("feet_region_diameters", 0, 20);
   p.feet_boost = f.getInRange("feet_boost", 0, 10);
   f.finish();
+  if (p.line_count > p.max_count) throw Error(path + ": line_count must not exceed max_count");
   if (p.max_radius_px <= p.min_radius_px) {
     throw Error(path + ": max_radius_px must be larger than min_radius_px");
   }
@@ -88,7 +91,8 @@ class Integral {
 // Centre mean minus, over the four pairs of opposite surround cells, the brightest pair's darker
 // cell (a line or a crossing through the centre lights both cells of a pair; a robot's foot or a
 // line beside the ball only one), plus the print term: the spread of the centre's four quadrants.
-float response(const Integral& ii, int x, int y, double r, const BallProposerParams& p) {
+float response(const Integral& ii, int x, int y, double r, const BallProposerParams& p,
+               float* on_line = nullptr) {
   const int a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
   const int b = std::max(a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
   const int xs[4] = {ii.clampX(x - b), ii.clampX(x - a), ii.clampX(x + a), ii.clampX(x + b)};
@@ -111,17 +115,29 @@ float response(const Integral& ii, int x, int y, double r, const BallProposerPar
   // Opposite pairs: left-right, top-bottom, and the two diagonals. A cell outside the image does
   // not light its pair.
   const int pairs[4][4] = {{1, 0, 1, 2}, {0, 1, 2, 1}, {0, 0, 2, 2}, {0, 2, 2, 0}};
-  float surround = -1e9f;
-  float any = -1e9f;
+  float surround = -1e9f, second = -1e9f;
   for (const auto& q : pairs) {
-    const bool va = valid[q[0]][q[1]], vb = valid[q[2]][q[3]];
-    const float ma = mean[q[0]][q[1]], mb = mean[q[2]][q[3]];
-    if (va) any = std::max(any, ma);
-    if (vb) any = std::max(any, mb);
-    if (va && vb) surround = std::max(surround, std::min(ma, mb));
+    if (valid[q[0]][q[1]] && valid[q[2]][q[3]]) {
+      const float m = std::min(mean[q[0]][q[1]], mean[q[2]][q[3]]);
+      if (m > surround) {
+        second = surround;
+        surround = m;
+      } else if (m > second) {
+        second = m;
+      }
+    }
   }
-  if (surround < -1e8f) surround = any;  // at a corner of the image: the brightest cell left
-  if (surround < -1e8f) return -1e9f;
+  // On a line: the ball on a line lights one pair like the line itself; against the second
+  // brightest pair it still stands out (a crossing lights two pairs).
+  if (on_line) *on_line = second > -1e8f ? mean[1][1] - second : -1e9f;
+  // The ring's mean (the 8 cells, by area): off the ball's centre part of the ball falls into the
+  // ring and raises it, which keeps the peak on the centre.
+  const int ring_area = (xs[3] - xs[0]) * (ys[3] - ys[0]) - (xs[2] - xs[1]) * (ys[2] - ys[1]);
+  if (ring_area <= 0) return -1e9f;
+  const std::uint32_t outer_sum = v[3][3] - v[0][3] - v[3][0] + v[0][0];
+  const std::uint32_t inner_sum = v[2][2] - v[1][2] - v[2][1] + v[1][1];
+  const float ring = static_cast<float>(outer_sum - inner_sum) / static_cast<float>(ring_area);
+  surround = std::max(surround, ring);
   float dog = mean[1][1] - surround;
   if (p.print_weight > 0) {
     const int cx = std::clamp(x, xs[1], xs[2]);
@@ -207,11 +223,13 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   const Integral ii(image, rx0, ry0, rx1, ry1);
 
   std::vector<Candidate> candidates;
+  std::vector<Candidate> line_candidates;
   std::vector<Candidate> best;
   const int keep = p.per_window_count;
   for (std::size_t k = 0; k < rects.size(); ++k) {
     const ScanRect& rc = rects[k];
     best.clear();
+    Candidate best_line{0, 0, 0, -1e9f};
     const double cx = (rc.x0 + rc.x1) / 2.0;
     int y = rc.y0;
     while (y < rc.y1) {
@@ -222,17 +240,21 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       } else {
         rad = camera.ballRadiusPx({cx, y + 0.5}, p.ball_radius_m);
       }
-      if (!rad || *rad > p.max_radius_px) {
+      if (!rad || *rad > p.max_radius_px || *rad < p.min_radius_px) {
         ++y;
         continue;
       }
-      const double r = std::max(*rad, p.min_radius_px);
+      const double r = *rad;
       const int step = std::max(1, static_cast<int>(p.step_fraction * r));
       const int x_start = rc.x0 + (step - 1) / 2;
       const int yy = std::min(y + (step - 1) / 2, rc.y1 - 1);
       for (int x = x_start; x < rc.x1; x += step) {
         if (!ignore.looked(x, yy)) continue;
-        const float resp = response(ii, x, yy, r, p) * static_cast<float>(rc.boost);
+        float line_resp = 0;
+        const float resp = response(ii, x, yy, r, p, &line_resp) * static_cast<float>(rc.boost);
+        if (p.line_count > 0 && line_resp > best_line.response) {
+          best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
+        }
         if (resp < p.min_response) continue;
         const Candidate cand{x + 0.5f, yy + 0.5f, static_cast<float>(r), resp};
         if (static_cast<int>(best.size()) < keep) {
@@ -247,31 +269,62 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       y += step;
     }
     candidates.insert(candidates.end(), best.begin(), best.end());
+    if (best_line.response >= p.line_min_response) line_candidates.push_back(best_line);
   }
-  std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& l, const Candidate& m) {
+  const auto by_response = [](const Candidate& l, const Candidate& m) {
     if (l.response != m.response) return l.response > m.response;
     if (l.y != m.y) return l.y < m.y;
     return l.x < m.x;
-  });
+  };
+  std::stable_sort(candidates.begin(), candidates.end(), by_response);
+  std::stable_sort(line_candidates.begin(), line_candidates.end(), by_response);
   std::vector<BallProposal> out;
-  for (const Candidate& c : candidates) {
-    if (static_cast<int>(out.size()) >= p.max_count) break;
-    bool suppressed = false;
-    for (const BallProposal& o : out) {
-      const double d = p.nms_fraction * std::max<double>(c.r, o.radius_px);
-      const double dx = c.x - o.centre_px.x(), dy = c.y - o.centre_px.y();
-      if (dx * dx + dy * dy < d * d) {
-        suppressed = true;
-        break;
+  const auto take = [&](const std::vector<Candidate>& list, int limit) {
+    for (const Candidate& c : list) {
+      if (static_cast<int>(out.size()) >= limit) break;
+      bool suppressed = false;
+      for (const BallProposal& o : out) {
+        const double d = p.nms_fraction * std::max<double>(c.r, o.radius_px);
+        const double dx = c.x - o.centre_px.x(), dy = c.y - o.centre_px.y();
+        if (dx * dx + dy * dy < d * d) {
+          suppressed = true;
+          break;
+        }
       }
+      if (suppressed) continue;
+      // Refine the centre at single pixels within the scan step around the winner.
+      const int step = std::max(1, static_cast<int>(p.step_fraction * c.r));
+      const int cx = static_cast<int>(c.x), cy = static_cast<int>(c.y);
+      float best_resp = c.response;
+      int bx = cx, by = cy;
+      const bool line = &list == &line_candidates;
+      const auto score = [&](int x, int y) {
+        float on_line = 0;
+        const float r1 = response(ii, x, y, c.r, p, &on_line);
+        return line ? on_line : r1;
+      };
+      const float boost = line ? 1.0f : c.response / std::max(1e-6f, score(cx, cy));
+      for (int dy = -step / 2; dy <= step / 2 && step > 1; ++dy) {
+        for (int dx = -step / 2; dx <= step / 2; ++dx) {
+          const int x = cx + dx, y = cy + dy;
+          if ((dx == 0 && dy == 0) || !image.contains(x, y) || !ignore.looked(x, y)) continue;
+          const float r2 = score(x, y) * boost;
+          if (r2 > best_resp) best_resp = r2, bx = x, by = y;
+        }
+      }
+      BallProposal prop;
+      prop.centre_px = {bx + 0.5, by + 0.5};
+      prop.radius_px = c.r;
+      prop.response = best_resp;
+      out.push_back(prop);
     }
-    if (suppressed) continue;
-    BallProposal prop;
-    prop.centre_px = {c.x, c.y};
-    prop.radius_px = c.r;
-    prop.response = c.response;
-    out.push_back(prop);
-  }
+  };
+  take(candidates, p.max_count - p.line_count);
+  take(line_candidates, static_cast<int>(out.size()) + p.line_count);
+  take(candidates, p.max_count);  // unused line slots go back to the others
+  // Strongest first (refinement can reorder; on-line responses share the scale).
+  std::stable_sort(out.begin(), out.end(),
+                   [](const BallProposal& l, const BallProposal& m) { return l.response > m.response; });
   return out;
 }
 
