@@ -26,6 +26,7 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.line_min_response = f.getInRange("line_min_response", -255, 255);
   p.feet_region_diameters = f.getInRange("feet_region_diameters", 0, 20);
   p.feet_boost = f.getInRange("feet_boost", 0, 10);
+  p.texture_weight = f.getInRange("texture_weight", 0, 10);
   f.finish();
   if (p.line_count > p.max_count) throw Error(path + ": line_count must not exceed max_count");
   if (p.max_radius_px <= p.min_radius_px) {
@@ -271,6 +272,30 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
     candidates.insert(candidates.end(), best.begin(), best.end());
     if (best_line.response >= p.line_min_response) line_candidates.push_back(best_line);
   }
+  // Ranking: the ball's black print makes its centre box textured where robots' feet and hands,
+  // lines and marks are flat; the per-window winners (placed by the DoG) are ranked by the DoG
+  // plus texture_weight × the standard deviation of the centre box's pixels.
+  if (p.texture_weight > 0) {
+    for (Candidate& c : candidates) {
+      const int a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * c.r)));
+      const int sub = std::max(1, a / 4);
+      const int cx = static_cast<int>(c.x), cy = static_cast<int>(c.y);
+      double sum = 0, sq = 0;
+      int n = 0;
+      for (int y = std::max(0, cy - a); y <= std::min(image.height - 1, cy + a); y += sub) {
+        const std::uint8_t* row = image.row(y);
+        for (int x = std::max(0, cx - a); x <= std::min(image.width - 1, cx + a); x += sub) {
+          sum += row[x];
+          sq += static_cast<double>(row[x]) * row[x];
+          ++n;
+        }
+      }
+      if (n > 1) {
+        const double mean = sum / n;
+        c.response += static_cast<float>(p.texture_weight * std::sqrt(std::max(0.0, sq / n - mean * mean)));
+      }
+    }
+  }
   const auto by_response = [](const Candidate& l, const Candidate& m) {
     if (l.response != m.response) return l.response > m.response;
     if (l.y != m.y) return l.y < m.y;
@@ -303,19 +328,20 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
         const float r1 = response(ii, x, y, c.r, p, &on_line);
         return line ? on_line : r1;
       };
-      const float boost = line ? 1.0f : c.response / std::max(1e-6f, score(cx, cy));
+      const float base = score(cx, cy);
+      float best_base = base;
       for (int dy = -step / 2; dy <= step / 2 && step > 1; ++dy) {
         for (int dx = -step / 2; dx <= step / 2; ++dx) {
           const int x = cx + dx, y = cy + dy;
           if ((dx == 0 && dy == 0) || !image.contains(x, y) || !ignore.looked(x, y)) continue;
-          const float r2 = score(x, y) * boost;
-          if (r2 > best_resp) best_resp = r2, bx = x, by = y;
+          const float r2 = score(x, y);
+          if (r2 > best_base) best_base = r2, bx = x, by = y;
         }
       }
       BallProposal prop;
       prop.centre_px = {bx + 0.5, by + 0.5};
       prop.radius_px = c.r;
-      prop.response = best_resp;
+      prop.response = best_resp + (best_base - base);
       out.push_back(prop);
     }
   };

@@ -44,6 +44,9 @@ struct BallProposerParams {
   /// scanned too (when robot percepts exist), and its responses are multiplied by feet_boost.
   double feet_region_diameters = 3.0;
   double feet_boost = 1.5;
+  /// Ranking of the per-window winners: DoG + texture_weight × standard deviation of the centre
+  /// box (the ball's print is textured; feet, hands, lines and marks are flat).
+  double texture_weight = 1.0;
 
   bool operator==(const BallProposerParams&) const = default;
   static BallProposerParams load(const std::string& path);
