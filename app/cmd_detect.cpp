@@ -63,6 +63,18 @@ nlohmann::json toJson(const Frame& frame, const PipelineStats& stats) {
     j["penalty_marks"].push_back(
         {{"centre_px", vec(m.centre_px)}, {"centre_in_robot_m", vec(m.centre_in_robot)}});
   }
+  // Ball (issue 6): proposals and detections.
+  if (frame.ball_proposals) {
+    j["ball_proposals"] = nlohmann::json::array();
+    for (const auto& p : *frame.ball_proposals) {
+      j["ball_proposals"].push_back({{"centre_px", vec(p.centre_px)}, {"radius_px", p.radius_px}, {"response", p.response}});
+    }
+    j["balls"] = nlohmann::json::array();
+    for (const auto& b : *frame.ball_percepts) {
+      j["balls"].push_back({{"centre_px", vec(b.centre_px)}, {"radius_px", b.radius_px}, {"confidence", b.confidence},
+                            {"position_in_robot_m", b.position_in_robot ? vec(*b.position_in_robot) : nlohmann::json(nullptr)}});
+    }
+  }
   for (int i = 0; i < kStageCount; ++i) {
     const auto& t = stats.timing(static_cast<Stage>(i));
     j["timing_ms"][stageName(static_cast<Stage>(i))] =
@@ -106,6 +118,16 @@ void printText(const std::string& path, const Frame& frame, const PipelineStats&
   for (const auto& m : fl.features.penalty_marks) {
     std::printf("  image (%.1f, %.1f) px  robot (%.3f, %.3f) m\n", m.centre_px.x(), m.centre_px.y(),
                 m.centre_in_robot.x(), m.centre_in_robot.y());
+  }
+  if (frame.ball_proposals) {
+    std::printf("ball proposals: %zu\n", frame.ball_proposals->size());
+    std::printf("balls: %zu\n", frame.ball_percepts->size());
+    for (const auto& b : *frame.ball_percepts) {
+      std::printf("  image (%.1f, %.1f) px  radius %.1f px  confidence %.3f", b.centre_px.x(), b.centre_px.y(),
+                  b.radius_px, b.confidence);
+      if (b.position_in_robot) std::printf("  robot (%.3f, %.3f) m", b.position_in_robot->x(), b.position_in_robot->y());
+      std::printf("\n");
+    }
   }
   std::printf("%s", stats.table().c_str());
 }
@@ -158,6 +180,14 @@ void drawAnnotated(const std::string& path, const Frame& frame) {
   }
   for (const auto& m : fl.features.penalty_marks) {
     cv::drawMarker(img, pt(m.centre_px), {255, 0, 255}, cv::MARKER_TILTED_CROSS, 14, 2);
+  }
+  if (frame.ball_proposals) {
+    for (const auto& p : *frame.ball_proposals) {
+      cv::circle(img, pt(p.centre_px), static_cast<int>(std::lround(p.radius_px)), {0, 120, 255}, 1);
+    }
+    for (const auto& b : *frame.ball_percepts) {
+      cv::circle(img, pt(b.centre_px), static_cast<int>(std::lround(b.radius_px)) + 2, {0, 0, 255}, 2);
+    }
   }
   // Written to a temporary name first, so that a half-written file never looks complete.
   const std::string tmp = path + ".tmp.png";

@@ -17,6 +17,8 @@ void addTrainCommand(CLI::App& app, int& exit_code);
 // `run` (render, detect and score a scenario: results.json and report.html).
 void addRunCommand(CLI::App& app, int& exit_code);
 void addDetectCommand(CLI::App& app, int& exit_code);
+// `learn` (active learning of a kind's nets in the simulator).
+void addLearnCommand(CLI::App& app, int& exit_code);
 
 // `bench` (the paper's experiments, sharded or in worker processes) and `merge` (shard files).
 void addBenchCommand(CLI::App& app, int& exit_code);

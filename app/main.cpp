@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   colorfree::app::addDetectCommand(app, exit_code);
   colorfree::app::addBenchCommand(app, exit_code);
   colorfree::app::addMergeCommand(app, exit_code);
+  colorfree::app::addLearnCommand(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -25,6 +25,28 @@ std::string stageKey(Stage stage) {
   return "unknown";
 }
 
+namespace {
+
+// What each ball net said about the proposals that reached it, for the CNN accuracy table (the
+// scorer matches each sample to the truth).
+void addBallClassifierSamples(const Frame& frame, FramePercepts* out) {
+  if (!frame.ball_decisions || !frame.ball_proposals) return;
+  for (const BallDecision& d : *frame.ball_decisions) {
+    ClassifierSample s;
+    s.classifier = "BoostBallNet";
+    s.object = ClassifierSample::Object::kBall;
+    s.centre_px = (*frame.ball_proposals)[d.proposal].centre_px;
+    s.predicted_positive = d.boost_confidence >= 0.5f;
+    out->classifier_samples.push_back(s);
+    if (!d.passed_boost) continue;
+    s.classifier = "BallNet";
+    s.predicted_positive = d.detected || d.ball_confidence >= 0.5f;
+    out->classifier_samples.push_back(s);
+  }
+}
+
+}  // namespace
+
 PerceptionRunner::PerceptionRunner()
     : pipeline_(PipelineConfig::loadDefault()),
       pose_fitter_(PoseFitParams::loadDefault(), FieldDimensions::loadDefault()) {}
@@ -44,6 +66,7 @@ FramePercepts PerceptionRunner::process(const GrayImage& image, const CameraMode
   }
   p.ball_proposals = frame.ball_proposals;
   p.balls = frame.ball_percepts;
+  addBallClassifierSamples(frame, &p);
   p.robot_proposals = frame.robot_proposals;
   p.robots = frame.robot_percepts;
   p.orientation_stage = this_frame.timing(Stage::kRobotOrientation).has_value();

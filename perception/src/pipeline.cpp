@@ -53,6 +53,8 @@ PipelineConfig PipelineConfig::load(const std::string& dir) {
   c.high_contrast = HighContrastParams::load(dir + "/high_contrast.yaml");
   c.field_lines = FieldLineParams::load(dir + "/field_lines.yaml");
   c.field = FieldDimensions::load(dir + "/field_dimensions.yaml");
+  c.ball_proposer = BallProposerParams::load(dir + "/ball_proposer.yaml");
+  c.ball_detector = BallDetectorParams::load(dir + "/ball_detector.yaml");
   return c;
 }
 
@@ -63,7 +65,10 @@ Pipeline::Pipeline(PipelineConfig config)
       field_boundary_(config.field_boundary),
       body_contour_(config.body_model),
       high_contrast_(config.high_contrast),
-      field_lines_(config.field_lines, config.field) {}
+      field_lines_(config.field_lines, config.field),
+      ball_proposer_(config.ball_proposer) {
+  if (config_.ball_stages) ball_detector_ = BallDetector::load(config_.ball_detector, config_.model_dir);
+}
 
 namespace {
 
@@ -106,6 +111,19 @@ void Pipeline::process(Frame& frame, PipelineStats* stats) const {
   timed(stats, Stage::kFieldLines, [&] {
     frame.field_lines = field_lines_.run(image, frame.camera, *frame.ignore_mask, config_.keep_rejected);
   });
+  // Robot stages (robot proposals, detector, orientation) come here when they exist; the ball
+  // proposals then also scan the regions in front of the detected robots' feet.
+  if (ball_detector_) {
+    timed(stats, Stage::kBallProposals, [&] {
+      frame.ball_proposals = ball_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions,
+                                                frame.robot_percepts ? &*frame.robot_percepts : nullptr);
+    });
+    timed(stats, Stage::kBallDetector, [&] {
+      std::vector<BallDecision> decisions;
+      frame.ball_percepts = ball_detector_->run(image, frame.camera, *frame.ball_proposals, &decisions);
+      frame.ball_decisions = std::move(decisions);
+    });
+  }
 }
 
 }  // namespace colorfree

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "colorfree/perception/ball_detector.h"
+#include "colorfree/perception/ball_proposer.h"
 #include "colorfree/perception/camera_model.h"
 #include "colorfree/perception/field_lines.h"
 #include "colorfree/perception/high_contrast.h"
@@ -30,6 +32,8 @@ struct Frame {
   std::optional<std::vector<RobotPercept>> robot_percepts;
   std::optional<std::vector<BallProposal>> ball_proposals;
   std::optional<std::vector<BallPercept>> ball_percepts;
+  /// The ball cascade's decision per proposal (same order as ball_proposals).
+  std::optional<std::vector<BallDecision>> ball_decisions;
 
   Frame(GrayView image_in, CameraModel camera_in)
       : image(image_in), camera(std::move(camera_in)) {}
@@ -79,6 +83,10 @@ struct PipelineConfig {
   HighContrastParams high_contrast;
   FieldLineParams field_lines;
   FieldDimensions field;
+  BallProposerParams ball_proposer;
+  BallDetectorParams ball_detector;
+  bool ball_stages = true;  ///< run ball proposals and the ball detector (needs the ball nets)
+  std::string model_dir;    ///< the nets' directory; empty = the shipped perception/models
   bool use_body_contour = true;  ///< the observer's body (bottom camera)
   bool keep_rejected = false;    ///< keep rejected candidates with their reason
 
@@ -101,6 +109,8 @@ class Pipeline {
   BodyContourProvider body_contour_;
   HighContrastDetector high_contrast_;
   FieldLineDetector field_lines_;
+  BallProposer ball_proposer_;
+  std::optional<BallDetector> ball_detector_;
 };
 
 }  // namespace colorfree

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "colorfree/perception/camera_model.h"
+#include "colorfree/perception/high_contrast.h"
+#include "colorfree/perception/ignore_regions.h"
+#include "colorfree/perception/image.h"
+#include "colorfree/perception/percepts.h"
+
+namespace colorfree {
+
+/// Parameters of the ball proposal stage (perception/params/ball_proposer.yaml).
+struct BallProposerParams {
+  double ball_radius_m = 0.05;      ///< the ball (SPL: 0.1 m diameter)
+  double min_radius_px = 2.4;       ///< positions where the ball would be smaller are skipped
+  double max_radius_px = 90.0;      ///< positions where the ball would be larger are skipped
+  /// Scan step in pixels: max(1, floor(step_fraction × expected radius)).
+  double step_fraction = 0.25;
+  /// Difference of box filters (a box-shaped DoG): the centre box has half-side
+  /// inner_fraction × r, the surround box half-side outer_fraction × r; the response is the centre
+  /// mean minus the surround, taken over the 3×3 grid of cells these boxes make: of the four pairs
+  /// of opposite surround cells, the brightest pair's darker cell (a line through the centre lights
+  /// both cells of a pair, an object beside the ball only one) or the ring's mean if larger.
+  /// The winners are refined at single pixels within one scan step.
+  double inner_fraction = 0.65;
+  double outer_fraction = 1.6;
+  /// The ball's black print: the spread (brightest minus darkest mean) of the centre box's four
+  /// quadrants is added to the response with this weight.
+  double print_weight = 0.0;
+  double min_response = 6.0;        ///< grey levels; weaker responses never become proposals
+  int per_window_count = 1;         ///< best responses kept per 16×16 window (grid cell)
+  /// Two proposals closer than nms_fraction × the larger radius: only the stronger one is kept.
+  double nms_fraction = 1.0;
+  int max_count = 12;               ///< proposals per frame at most
+  /// Of these, up to line_count slots for balls on lines: candidates scored against the second
+  /// brightest opposite pair (a line lights one pair, as does the ball on it), at least
+  /// line_min_response; slots they do not fill go to the others.
+  int line_count = 3;
+  double line_min_response = 20.0;
+  /// Robots' feet: a region this many ball diameters wide and deep around the feet point is
+  /// scanned too (when robot percepts exist), and its responses are multiplied by feet_boost.
+  double feet_region_diameters = 3.0;
+  double feet_boost = 1.5;
+  /// Ranking of the per-window winners: DoG + texture_weight × standard deviation of the centre
+  /// box (the ball's print is textured; feet, hands, lines and marks are flat).
+  double texture_weight = 1.0;
+
+  bool operator==(const BallProposerParams&) const = default;
+  static BallProposerParams load(const std::string& path);
+  static BallProposerParams loadDefault();
+};
+
+/// Ball proposals (paper 2.4): a pixel-wise scan of the high-contrast windows (and the regions in
+/// front of detected robots' feet) with box Difference-of-Gaussians filters whose supports follow
+/// the ball's expected radius from the camera model, evaluated on an integral image; the strongest
+/// responses per window survive non-maximum suppression, sorted by response, capped in count;
+/// a few slots are kept for the best on-line candidates (a ball lying on a line).
+class BallProposer {
+ public:
+  explicit BallProposer(BallProposerParams params = {});
+  /// `robots` may be null (no robot detector in the pipeline). Throws colorfree::Error when the
+  /// inputs do not match the image size.
+  std::vector<BallProposal> run(const GrayView& image, const CameraModel& camera,
+                                const IgnoreMask& ignore, const ContrastRegions& regions,
+                                const std::vector<RobotPercept>* robots = nullptr) const;
+  const BallProposerParams& params() const { return params_; }
+
+ private:
+  BallProposerParams params_;
+};
+
+}  // namespace colorfree

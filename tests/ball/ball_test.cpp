@@ -1,0 +1,185 @@
+// Ball proposals and the ball detector on synthetic frames: a drawn ball at a known place on
+// textured carpet, with a line through it, next to a drawn foot; nothing on blank carpet or a lone
+// line crossing. Parameter files: strict, defaults equal the shipped files.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "colorfree/perception/ball_detector.h"
+#include "colorfree/perception/ball_proposer.h"
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/param_file.h"
+#include "colorfree/perception/pipeline.h"
+#include "synthetic_ball.h"
+#include "synthetic_field.h"
+
+namespace colorfree {
+namespace {
+
+test::SyntheticScene carpetOnly(std::uint64_t seed) {
+  test::SyntheticScene s;
+  s.texture = 10;
+  s.seed = seed;
+  return s;
+}
+
+struct Found {
+  std::vector<BallProposal> proposals;
+  std::vector<BallPercept> balls;
+};
+
+Found runPipeline(const GrayImage& image, const CameraModel& cam) {
+  static const Pipeline pipeline(PipelineConfig::loadDefault());
+  Frame frame(image.view(), cam);
+  pipeline.process(frame);
+  return {*frame.ball_proposals, *frame.ball_percepts};
+}
+
+std::string describe(const std::vector<BallProposal>& props) {
+  std::ostringstream out;
+  out << "\nproposals:";
+  for (const auto& p : props) out << "\n  (" << p.centre_px.transpose() << ") r=" << p.radius_px << " response " << p.response;
+  return out.str();
+}
+
+// Index of the first proposal within the scorer's match rule (half the radius, at least 2 px).
+int matchIndex(const std::vector<BallProposal>& props, const test::DrawnBall& b) {
+  for (std::size_t i = 0; i < props.size(); ++i) {
+    if ((props[i].centre_px - b.centre_px).norm() <= std::max(2.0, 0.5 * b.radius_px)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+bool detected(const std::vector<BallPercept>& balls, const test::DrawnBall& b) {
+  for (const auto& p : balls) {
+    if ((p.centre_px - b.centre_px).norm() <= std::max(2.0, 0.5 * b.radius_px)) return true;
+  }
+  return false;
+}
+
+class DrawnBallAt : public ::testing::TestWithParam<double> {};
+
+TEST_P(DrawnBallAt, TexturedCarpetFoundWhereItIs) {
+  const CameraModel cam = test::testCamera(22);
+  GrayImage image = test::renderScene(cam, carpetOnly(3));
+  const test::DrawnBall b = test::drawBall(image, cam, {GetParam(), 0.15});
+  if (std::getenv("BALL_TEST_DUMP")) writeGrayPng(std::string(std::getenv("BALL_TEST_DUMP")) + ".png", image.view());
+  const Found f = runPipeline(image, cam);
+  const int i = matchIndex(f.proposals, b);
+  ASSERT_GE(i, 0) << "no proposal at the ball (" << b.centre_px.transpose() << "), r=" << b.radius_px
+                  << describe(f.proposals);
+  EXPECT_NEAR(f.proposals[i].radius_px, b.radius_px, 0.25 * b.radius_px + 0.5);
+  ASSERT_EQ(f.balls.size(), 1u);
+  EXPECT_TRUE(detected(f.balls, b));
+  ASSERT_TRUE(f.balls[0].position_in_robot);
+  EXPECT_NEAR(f.balls[0].position_in_robot->x(), GetParam(), 0.12 * GetParam());
+  EXPECT_NEAR(f.balls[0].position_in_robot->y(), 0.15, 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(Distances, DrawnBallAt, ::testing::Values(0.8, 1.5, 3.0));
+
+// KNOWN FAILURE (disabled, see README "Ball detection"): a ball lying on a line straight ahead is
+// not proposed; the line's own on-line responses are as strong as the ball's.
+TEST(BallDetection, DISABLED_LineThroughTheBall) {
+  const CameraModel cam = test::testCamera(22);
+  test::SyntheticScene scene = carpetOnly(4);
+  scene.segments.push_back({{0.5, 0.0}, {4.0, 0.0}});   // a line along x ...
+  scene.segments.push_back({{1.6, -2.0}, {1.6, 2.0}});  // ... and one crossing it
+  GrayImage image = test::renderScene(cam, scene);
+  const test::DrawnBall b = test::drawBall(image, cam, {1.3, 0.0});
+  const Found f = runPipeline(image, cam);
+  EXPECT_GE(matchIndex(f.proposals, b), 0) << b.centre_px.transpose() << " r=" << b.radius_px << describe(f.proposals);
+  EXPECT_TRUE(detected(f.balls, b));
+  EXPECT_LE(f.balls.size(), 1u);
+}
+
+TEST(BallDetection, NextToAFoot) {
+  const CameraModel cam = test::testCamera(22);
+  GrayImage image = test::renderScene(cam, carpetOnly(5));
+  test::drawFoot(image, cam, {1.2, 0.05});
+  const test::DrawnBall b = test::drawBall(image, cam, {1.1, -0.12});
+  const Found f = runPipeline(image, cam);
+  EXPECT_GE(matchIndex(f.proposals, b), 0);
+  EXPECT_TRUE(detected(f.balls, b));
+}
+
+TEST(BallDetection, NothingOnBlankCarpet) {
+  const CameraModel cam = test::testCamera(22);
+  for (std::uint64_t seed : {6u, 7u}) {
+    const GrayImage image = test::renderScene(cam, carpetOnly(seed));
+    const Found f = runPipeline(image, cam);
+    EXPECT_TRUE(f.balls.empty()) << f.balls[0].centre_px.transpose() << describe(f.proposals);
+  }
+}
+
+TEST(BallDetection, NothingOnALoneLineCrossing) {
+  const CameraModel cam = test::testCamera(22);
+  test::SyntheticScene scene = carpetOnly(8);
+  scene.segments.push_back({{0.5, 0.0}, {4.0, 0.0}});
+  scene.segments.push_back({{1.4, -2.0}, {1.4, 2.0}});
+  const GrayImage image = test::renderScene(cam, scene);
+  const Found f = runPipeline(image, cam);
+  EXPECT_FALSE(f.proposals.empty());  // the crossing is high contrast: the cascade must reject it
+  EXPECT_TRUE(f.balls.empty());
+}
+
+TEST(BallProposer, WorksWithoutAndWithRobotsAndIsCapped) {
+  const CameraModel cam = test::testCamera(22);
+  test::SyntheticScene scene = carpetOnly(9);
+  for (int i = 0; i < 12; ++i) scene.segments.push_back({{0.6 + 0.3 * i, -2.0}, {0.6 + 0.3 * i, 2.0}});
+  GrayImage image = test::renderScene(cam, scene);
+  test::drawFoot(image, cam, {1.5, 0.3});
+  const test::DrawnBall b = test::drawBall(image, cam, {1.45, 0.14});
+  const PipelineConfig config = PipelineConfig::loadDefault();
+  const HighContrastDetector hc(config.high_contrast);
+  const IgnoreMask ignore = IgnoreMask::all(image.width(), image.height());
+  const ContrastRegions regions = hc.run(image.view(), ignore);
+  const BallProposer proposer(config.ball_proposer);
+  const auto without = proposer.run(image.view(), cam, ignore, regions, nullptr);
+  EXPECT_LE(static_cast<int>(without.size()), config.ball_proposer.max_count);
+  RobotPercept robot;
+  robot.feet_px = *cam.robotToPixel({1.5, 0.3, 0});
+  const std::vector<RobotPercept> robots{robot};
+  const auto with = proposer.run(image.view(), cam, ignore, regions, &robots);
+  EXPECT_LE(static_cast<int>(with.size()), config.ball_proposer.max_count);
+  EXPECT_GE(matchIndex(with, b), 0);
+  for (std::size_t i = 1; i < with.size(); ++i) EXPECT_GE(with[i - 1].response, with[i].response);
+  // Same input, same output.
+  const auto again = proposer.run(image.view(), cam, ignore, regions, &robots);
+  ASSERT_EQ(again.size(), with.size());
+  for (std::size_t i = 0; i < with.size(); ++i) EXPECT_EQ(again[i].centre_px, with[i].centre_px);
+  // A mask of another size is an error.
+  EXPECT_THROW(proposer.run(image.view(), cam, IgnoreMask::all(320, 240), regions, nullptr), Error);
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string writeTemp(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + "/ball_" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(BallParams, DefaultsEqualTheShippedFilesAndLoadingIsStrict) {
+  EXPECT_EQ(BallProposerParams::loadDefault(), BallProposerParams{});
+  EXPECT_EQ(BallDetectorParams::loadDefault(), BallDetectorParams{});
+  const std::string prop = readFile(defaultParamDir() + "/ball_proposer.yaml");
+  EXPECT_THROW(BallProposerParams::load(writeTemp("extra.yaml", prop + "surprise: 1\n")), Error);
+  std::string nan = prop;
+  nan.replace(nan.find("min_response: "), 14, "min_response: .nan #");
+  EXPECT_THROW(BallProposerParams::load(writeTemp("nan.yaml", nan)), Error);
+  const std::string det = readFile(defaultParamDir() + "/ball_detector.yaml");
+  std::string missing = det.substr(0, det.find("max_balls"));
+  EXPECT_THROW(BallDetectorParams::load(writeTemp("missing.yaml", missing)), Error);
+  EXPECT_THROW(BallDetector::load(BallDetectorParams{}, "/nonexistent/models"), Error);
+}
+
+}  // namespace
+}  // namespace colorfree
