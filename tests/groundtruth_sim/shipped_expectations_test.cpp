@@ -13,13 +13,11 @@ namespace {
 
 TEST(ShippedScenarios, ExpectationsNameKnownMetrics) {
   int scenarios = 0;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(test::sourceDir() + "/scenes")) {
-    // scenes/bench.yaml is the bench's list of scenarios, not a scenario.
-    if (entry.path().extension() != ".yaml" || entry.path().filename() == "bench.yaml") continue;
-    const sim::Scenario s = sim::Scenario::load(entry.path().string());
+  for (const auto& path : test::shippedScenarioFiles()) {
+    const sim::Scenario s = sim::Scenario::load(path.string());
     ++scenarios;
     for (const auto& e : s.expect) {
-      const std::string origin = entry.path().string() + ":" + std::to_string(e.line);
+      const std::string origin = path.string() + ":" + std::to_string(e.line);
       EXPECT_NO_THROW(validateExpectations({parseExpectation(e.text, origin)}, origin))
           << origin << ": " << e.text;
     }
