@@ -15,4 +15,7 @@ void addRenderCommand(CLI::App& app, int& exit_code);
 void addTrainCommand(CLI::App& app, int& exit_code);
 void addDetectCommand(CLI::App& app, int& exit_code);
 
+// `robot-data` (training patches for the robot nets) and `robot-eval` (robot stages scored).
+void addRobotCommands(CLI::App& app, int& exit_code);
+
 }  // namespace colorfree::app

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   colorfree::app::addRenderCommand(app, exit_code);
   colorfree::app::addTrainCommand(app, exit_code);
   colorfree::app::addDetectCommand(app, exit_code);
+  colorfree::app::addRobotCommands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
