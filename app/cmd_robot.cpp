@@ -8,6 +8,9 @@
 #include <random>
 #include <string>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "colorfree/groundtruth/field_model.h"
 #include "colorfree/groundtruth/matching.h"
 #include "colorfree/groundtruth/results.h"
@@ -255,6 +258,7 @@ void addRobotCommands(CLI::App& app, int& exit_code) {
   eval->add_option("--frames", eval_args->frames, "frames per case instead of the scenario's");
   eval->add_option("--cases", eval_args->cases, "only these cases (comma-separated, 0-based)");
   eval->add_option("--json", eval_args->json_out, "write the results JSON here");
+  eval->add_option("--draw", eval_args->out, "write annotated frames (PNG) into this folder");
   eval->callback([eval_args, &exit_code]() {
     const RobotStages stages;
     const std::string path = eval_args->scenarios.at(0);
@@ -296,6 +300,34 @@ void addRobotCommands(CLI::App& app, int& exit_code) {
               [&] { robots = stages.detector.run(frame.image, camera, props.proposals); });
         timed(Stage::kRobotOrientation,
               [&] { stages.orientation.run(frame.image, camera, robots, tracks, f.truth.time_s); });
+        if (!eval_args->out.empty()) {
+          std::filesystem::create_directories(eval_args->out);
+          cv::Mat gray(f.image.height(), f.image.width(), CV_8UC1, const_cast<std::uint8_t*>(f.image.data()));
+          cv::Mat img;
+          cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
+          auto rect = [&](const PixelBox& b, cv::Scalar col) {
+            cv::rectangle(img, cv::Point(int(b.x0), int(b.y0)), cv::Point(int(b.x1), int(b.y1)), col, 1);
+          };
+          for (const auto& p : props.proposals) rect(p.box, {255, 0, 0});
+          for (const auto& q : props.feet_points_px) cv::circle(img, cv::Point(int(q.x()), int(q.y())), 2, {255, 128, 0}, -1);
+          for (const auto& r : robots) {
+            rect(r.box, {0, 255, 0});
+            const RobotLines lines = stages.orientation.estimate(frame.image, camera, r);
+            for (const auto& q : lines.silhouette_px) cv::circle(img, cv::Point(int(q.x()), int(q.y())), 1, {0, 0, 255}, -1);
+            for (const auto& reg : lines.regions) {
+              rect(reg.box, {0, 255, 255});
+              const auto a = camera.robotToPixel({reg.line_in_robot.a.x(), reg.line_in_robot.a.y(), 0});
+              const auto b = camera.robotToPixel({reg.line_in_robot.b.x(), reg.line_in_robot.b.y(), 0});
+              if (a && b) cv::line(img, cv::Point(int(a->x()), int(a->y())), cv::Point(int(b->x()), int(b->y())), {255, 0, 255}, 1);
+              char text[64];
+              std::snprintf(text, sizeof text, "u%.2f %s", reg.usable, reg.side ? (*reg.side == RobotSide::kFront ? "F" : *reg.side == RobotSide::kBack ? "B" : "S") : "-");
+              cv::putText(img, text, cv::Point(int(reg.box.x0), int(reg.box.y0) - 2), cv::FONT_HERSHEY_PLAIN, 0.8, {0, 255, 255});
+            }
+          }
+          char name[64];
+          std::snprintf(name, sizeof name, "/c%03d_f%04d.png", c, i);
+          cv::imwrite(eval_args->out + name, img);
+        }
         pc.robot_proposals = props.proposals;
         pc.robots = robots;
         pc.orientation_stage = true;

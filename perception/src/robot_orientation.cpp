@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <Eigen/Eigenvalues>
 
 #include "colorfree/perception/cnn/shipped_nets.h"
 #include "colorfree/perception/error.h"
@@ -117,6 +118,44 @@ RobotOrientationEstimator RobotOrientationEstimator::loadDefault() {
                                    cnn::Classifier::load(o.cfgPath(), o.weightsPath()));
 }
 
+namespace {
+// Least-squares refit of a hull line to the silhouette points that voted for it (the hull's
+// vertices are the extreme, noisiest points); the ends are the extreme inliers.
+LineHypothesis refineLine(const LineHypothesis& line, const std::vector<Eigen::Vector2d>& points,
+                          double vote_distance) {
+  const Eigen::Vector2d u = line.direction();
+  const Eigen::Vector2d n(-u.y(), u.x());
+  const double len = line.length();
+  std::vector<Eigen::Vector2d> in;
+  for (const auto& q : points) {
+    const double t = (q - line.a).dot(u);
+    if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -0.1 * len && t <= 1.1 * len) {
+      in.push_back(q);
+    }
+  }
+  if (in.size() < 3) return line;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& q : in) mean += q;
+  mean /= static_cast<double>(in.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& q : in) cov += (q - mean) * (q - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+  Eigen::Vector2d d = es.eigenvectors().col(1);
+  if (d.dot(u) < 0) d = -d;
+  double t0 = 0, t1 = 0;
+  for (const auto& q : in) {
+    const double t = (q - mean).dot(d);
+    t0 = std::min(t0, t);
+    t1 = std::max(t1, t);
+  }
+  LineHypothesis out = line;
+  out.a = mean + t0 * d;
+  out.b = mean + t1 * d;
+  out.votes = static_cast<int>(in.size());
+  return out;
+}
+}  // namespace
+
 RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const CameraModel& camera,
                                                 const RobotPercept& robot) const {
   const RobotOrientationParams& p = params_;
@@ -135,7 +174,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   for (int x = cns.x0 + half; x < cns.x0 + cns.width - half; x += p.scan_step_px) {
     for (int y = cns.y0 + cns.height - 2; y > cns.y0; --y) {
       int n = 0;
-      for (int dx = -half; dx <= half; ++dx) window[n++] = std::abs(cns.gyAt(x + dx, y));
+      // Bright feet above the darker carpet: the vertical response is negative there.
+      for (int dx = -half; dx <= half; ++dx) window[n++] = -cns.gyAt(x + dx, y);
       std::nth_element(window, window + n / 2, window + n);
       if (window[n / 2] > p.cns_threshold) {
         const Eigen::Vector2d pt(x + 0.5, y + 0.5);
@@ -153,8 +193,9 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   bounds.max_length = p.second_line_max_length_m;
   bounds.max_orthogonality_cos = p.second_line_max_cos;
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
-  for (const auto& line : {lines.first, lines.second}) {
+  for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
+    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m);
     const auto a = camera.robotToPixel({line->a.x(), line->a.y(), 0});
     const auto b = camera.robotToPixel({line->b.x(), line->b.y(), 0});
     if (!a || !b) continue;

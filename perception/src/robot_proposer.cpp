@@ -17,8 +17,10 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.carpet_update_weight = f.getInRange("carpet_update_weight", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
+  p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
+  p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
   p.min_width_fraction = f.getInRange("min_width_fraction", 0, 10);
   p.split_width_factor = f.getInRange("split_width_factor", 1, 10);
   p.box_width_factor = f.getInRange("box_width_factor", 0.1, 10);
@@ -112,7 +114,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         while (y >= y_lo) {
           const double v = image.at(x, y);
           const double thr = std::max(p.min_jump_gray, p.jump_ratio * carpet);
-          if (std::abs(v - carpet) <= thr) {
+          // Shadows are darker than the carpet, the robots' feet and legs brighter.
+          if (v - carpet <= thr) {
             carpet += p.carpet_update_weight * (v - carpet);
             --y;
             continue;
@@ -125,19 +128,23 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
             break;
           }
           const int needed = static_cast<int>(std::ceil(p.min_run_height_fraction * *expected));
-          // Follow the run upwards (also above the field boundary: the body may stand out of it).
-          int run_top = y, gap = 0;
-          for (int yy = y - 1; yy >= 0 && feet_y - run_top < needed; --yy) {
-            if (std::abs(image.at(x, yy) - carpet) > thr) {
-              run_top = yy;
+          // Above the feet, most pixels up to the needed height must differ from the carpet
+          // (a robot's legs, with gaps at the joints); the contiguous part decides where the
+          // scan goes on when the run is rejected.
+          int run_top = y, gap = 0, filled = 0;
+          bool contiguous = true;
+          for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
+            if (image.at(x, yy) - carpet > thr) {
+              ++filled;
+              if (contiguous) run_top = yy;
               gap = 0;
             } else if (++gap > p.max_gap_px) {
-              break;
+              contiguous = false;
             }
           }
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
-          } else if (feet_y - run_top >= needed) {
+          } else if (filled >= p.min_fill_fraction * needed) {
             feet.push_back({x, feet_y, *expected});
             out.feet_points_px.push_back(feet_px);
             break;  // one robot per scan line stretch: the lowest
@@ -158,7 +165,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     double best_dy = 0;
     for (int gi : open) {
       Group& g = groups[gi];
-      if (g.last_x < f.x - 2 * step || g.last_x == f.x) continue;
+      const double max_gap = std::max(2.0 * step, p.join_gap_width_fraction * g.expected_h * width_per_height);
+      if (g.last_x < f.x - max_gap || g.last_x == f.x) continue;
       const double tol = p.join_height_fraction * g.expected_h + 2;
       const double dy = std::abs(f.y - g.last_y);
       if (dy <= tol && (best < 0 || dy < best_dy)) {
@@ -177,7 +185,12 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
       g.expected_h = std::max(g.expected_h, f.expected_h);
     }
     open.erase(std::remove_if(open.begin(), open.end(),
-                              [&](int gi) { return groups[gi].last_x < f.x - 2 * step; }),
+                              [&](int gi) {
+                                return groups[gi].last_x <
+                                       f.x - std::max(2.0 * step, p.join_gap_width_fraction *
+                                                                      groups[gi].expected_h *
+                                                                      width_per_height);
+                              }),
                open.end());
   }
 
@@ -187,8 +200,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   };
   std::vector<Candidate> candidates;
   for (Group& g : groups) {
-    std::nth_element(g.ys.begin(), g.ys.begin() + g.ys.size() * 3 / 4, g.ys.end());
-    const int feet_y = g.ys[g.ys.size() * 3 / 4];
+    std::nth_element(g.ys.begin(), g.ys.begin() + g.ys.size() / 2, g.ys.end());
+    const int feet_y = g.ys[g.ys.size() / 2];
     const double cx = (g.first_x + g.last_x + 1) / 2.0;
     const auto h = camera.robotHeightPx({cx, static_cast<double>(feet_y)}, robot_height_m_);
     if (!h) continue;
@@ -220,7 +233,11 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   for (const Candidate& c : candidates) {
     bool overlaps = false;
     for (const RobotProposal& kept : out.proposals) {
-      if (iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
+      // A feet point inside a nearer robot's box is that robot's knee, hip or arm.
+      const Eigen::Vector2d& f = c.proposal.feet_px;
+      const bool inside = f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() > kept.box.y0 &&
+                          f.y() < kept.feet_px.y() - 0.1 * kept.box.height();
+      if (inside || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
         overlaps = true;
         break;
       }

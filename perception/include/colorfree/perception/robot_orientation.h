@@ -32,8 +32,8 @@ struct RobotOrientationParams {
   int scan_step_px = 1;                      ///< between vertical scan lines
   int median_width_px = 3;                   ///< horizontal median filter over the CNS response
   int variance_radius_px = 2;                ///< CNS local variance window radius
-  double cns_sigma_gray = 3;                 ///< CNS noise floor
-  double cns_threshold = 0.45;               ///< |vertical CNS| above this is the silhouette's edge
+  double cns_sigma_gray = 20;                ///< CNS noise floor
+  double cns_threshold = 0.5;                ///< minus the vertical CNS (bright above dark) above this is the silhouette
   double vote_distance_m = 0.012;            ///< line voting
   double second_line_min_length_m = 0.04;
   double second_line_max_length_m = 0.25;

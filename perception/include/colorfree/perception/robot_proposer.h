@@ -15,20 +15,25 @@ namespace colorfree {
 /// Parameters of the robot proposal stage (perception/params/robot_proposer.yaml).
 struct RobotProposerParams {
   int column_step_px = 4;  ///< distance between two scan lines inside a high-contrast column
-  /// A pixel leaves the carpet when it differs from the running carpet luminance by more than
+  /// A pixel leaves the carpet when it is brighter than the running carpet luminance by more than
   /// max(min_jump_gray, jump_ratio × carpet luminance) (gray levels).
   double min_jump_gray = 16;
   double jump_ratio = 0.18;
   /// Carpet pixels are averaged into the running carpet luminance with this weight.
   double carpet_update_weight = 0.25;
   int max_gap_px = 3;  ///< carpet-like pixels tolerated inside a robot run (a joint, a seam)
-  /// A run is a robot's lower body when it is at least this fraction of the expected pixel height
+  /// A run is a robot's lower body when it reaches at least this fraction of the expected pixel height
   /// of a robot whose feet are at its lower end (lines, the ball and shadows are shorter).
-  double min_run_height_fraction = 0.22;
+  double min_run_height_fraction = 0.4;
+  /// ... and at least this fraction of the pixels up to that height must be brighter than the carpet.
+  double min_fill_fraction = 0.6;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
   /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
   /// of the expected height (plus 2 px).
   double join_height_fraction = 0.12;
+  /// ... and when the columns between them are at most this fraction of the expected robot width
+  /// (the gap between two legs).
+  double join_gap_width_fraction = 0.45;
   /// A group narrower than this fraction of the expected robot width is dropped (a goal post's
   /// width is about 0.3 of it, so RobotNet still sees posts).
   double min_width_fraction = 0.2;
