@@ -33,6 +33,7 @@ nlohmann::json toJson(const Frame& frame, const PipelineStats& stats) {
   const auto& regions = *frame.contrast_regions;
   j["high_contrast"]["windows_marked"] = regions.markedCount();
   j["high_contrast"]["window_px"] = regions.window_px;
+  j["high_contrast"]["regions"] = nlohmann::json::array();
   for (const auto& r : regions.regions) {
     j["high_contrast"]["regions"].push_back(
         {{"box_px", {r.box.x0, r.box.y0, r.box.x1, r.box.y1}}, {"windows", r.window_count}});

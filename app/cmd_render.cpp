@@ -1,9 +1,12 @@
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <string>
 
+#include "colorfree/perception/error.h"
 #include "colorfree/sim/render_output.h"
 #include "colorfree/sim/scenario.h"
 #include "colorfree/sim/world_renderer.h"
@@ -15,7 +18,8 @@ namespace {
 // A one-line progress bar on stderr, redrawn in place.
 class ProgressBar {
  public:
-  explicit ProgressBar(bool enabled) : enabled_(enabled), start_(std::chrono::steady_clock::now()) {}
+  explicit ProgressBar(bool enabled)
+      : enabled_(enabled), start_(std::chrono::steady_clock::now()) {}
   void update(int done, int total, const std::string& label) {
     if (!enabled_) return;
     constexpr int kWidth = 30;
@@ -36,6 +40,10 @@ class ProgressBar {
   bool enabled_;
   std::chrono::steady_clock::time_point start_;
 };
+
+// Ctrl-C stops after the frame being rendered; the partial output is then removed.
+std::atomic<bool> g_interrupted{false};
+extern "C" void onInterrupt(int) { g_interrupted = true; }
 
 }  // namespace
 
@@ -67,10 +75,19 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
     options.object_maps = args->object_maps;
     sim::ScenarioRunner runner(std::move(scenario), sim::worldRendererFactory());
     ProgressBar bar(!args->quiet && ::isatty(STDERR_FILENO));
+    g_interrupted = false;
+    std::signal(SIGINT, onInterrupt);
+    std::signal(SIGTERM, onInterrupt);
     const int written = sim::renderToDirectory(
         runner, options, [&](int done, int total, const sim::RenderedFrame& f) {
           bar.update(done, total, runner.scenarioCase(f.case_index).name());
+          if (g_interrupted) {
+            throw Error("render of " + args->scenario + " interrupted; " + args->out +
+                        " was not written");
+          }
         });
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
     std::printf("%s: %d frames of %s written to %s\n", runner.scenario().name.c_str(), written,
                 args->scenario.c_str(), args->out.c_str());
     exit_code = 0;

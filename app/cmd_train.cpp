@@ -1,5 +1,6 @@
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <sstream>
 #include <string>
@@ -49,7 +50,8 @@ void runTrain(const TrainOptions& o, int& exit_code) {
   cnn::Net net = cnn::readDarknetCfg(o.cfg);
   const std::vector<std::string> classes = splitList(o.classes);
   const auto load_start = std::chrono::steady_clock::now();
-  const cnn::Dataset data = cnn::readDataset(o.data, net.input().width, net.input().height, classes);
+  const cnn::Dataset data =
+      cnn::readDataset(o.data, net.input().width, net.input().height, classes);
   cnn::TrainerParams p = o.params;
   if (o.optimizer == "adam") {
     p.optimizer = cnn::Optimizer::kAdam;
@@ -73,17 +75,18 @@ void runTrain(const TrainOptions& o, int& exit_code) {
   }
   const double load_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count();
-  std::printf("%s: %zu parameters, %lld multiply-adds; %s: %zu patches in %.2f s, classes:", o.cfg.c_str(),
-              net.parameterCount(), static_cast<long long>(net.multiplyAdds()), o.data.c_str(),
-              data.samples.size(), load_seconds);
+  std::printf("%s: %zu parameters, %lld multiply-adds; %s: %zu patches in %.2f s, classes:",
+              o.cfg.c_str(), net.parameterCount(), static_cast<long long>(net.multiplyAdds()),
+              o.data.c_str(), data.samples.size(), load_seconds);
   const auto counts = data.classCounts();
-  for (std::size_t c = 0; c < counts.size(); ++c) std::printf(" %s=%d", data.class_names[c].c_str(), counts[c]);
+  for (std::size_t c = 0; c < counts.size(); ++c)
+    std::printf(" %s=%d", data.class_names[c].c_str(), counts[c]);
   std::printf("\n");
   const cnn::EpochCallback report = [&](const cnn::EpochReport& e) {
     if (o.quiet) return;
-    std::printf("epoch %3d  train loss %.4f acc %.4f  validation loss %.4f acc %.4f  %.2f s%s\n", e.epoch,
-                e.train_loss, e.train_accuracy, e.validation.loss, e.validation.accuracy, e.seconds,
-                e.best ? "  *" : "");
+    std::printf("epoch %3d  train loss %.4f acc %.4f  validation loss %.4f acc %.4f  %.2f s%s\n",
+                e.epoch, e.train_loss, e.train_accuracy, e.validation.loss, e.validation.accuracy,
+                e.seconds, e.best ? "  *" : "");
     std::fflush(stdout);
   };
   cnn::TrainResult r;
@@ -95,37 +98,50 @@ void runTrain(const TrainOptions& o, int& exit_code) {
     r = cnn::train(net, data, val, p, report);
   }
   cnn::writeDarknetWeights(r.net, o.out);
-  std::printf("best epoch %d of %zu: validation accuracy %.4f on %d samples (%d wrong); trained on %d in %.2f s\n",
-              r.best_epoch, r.epochs.size(), r.validation.accuracy, r.validation.samples,
-              static_cast<int>(r.validation.wrong.size()), r.train_samples, r.seconds);
+  std::printf(
+      "best epoch %d of %zu: validation accuracy %.4f on %d samples (%d wrong); trained on %d in "
+      "%.2f s\n",
+      r.best_epoch, r.epochs.size(), r.validation.accuracy, r.validation.samples,
+      static_cast<int>(r.validation.wrong.size()), r.train_samples, r.seconds);
   printConfusion(r.validation, data.class_names);
   std::printf("wrote %s\n", o.out.c_str());
   exit_code = 0;
 }
 
-// Median time per patch of `classifier` in µs, for batches of `batch`.
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// Median CPU time per patch of `classifier` in µs, for batches of `batch` (CPU time: on a shared
+// machine wall time also counts other processes).
 double timePerPatchUs(const cnn::Classifier& classifier, int batch) {
   std::vector<float> inputs(static_cast<std::size_t>(batch) * classifier.input().size());
-  for (std::size_t i = 0; i < inputs.size(); ++i) inputs[i] = static_cast<float>((i * 37) % 101) / 50.0f - 1.0f;
+  for (std::size_t i = 0; i < inputs.size(); ++i)
+    inputs[i] = static_cast<float>((i * 37) % 101) / 50.0f - 1.0f;
   std::vector<float> probs(static_cast<std::size_t>(batch) * classifier.classes());
   std::vector<double> runs;
   for (int rep = 0; rep < 7; ++rep) {
     const int iterations = 4000 / batch + 1;
-    const auto t0 = std::chrono::steady_clock::now();
+    const double t0 = threadCpuSeconds();
     for (int i = 0; i < iterations; ++i) classifier.run(inputs.data(), batch, probs.data());
-    runs.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e6 /
-                   (static_cast<double>(iterations) * batch));
+    runs.push_back((threadCpuSeconds() - t0) * 1e6 / (static_cast<double>(iterations) * batch));
   }
   std::sort(runs.begin(), runs.end());
   return runs[runs.size() / 2];
 }
 
 void runTable(const std::string& models, const std::string& data_root) {
-  std::printf("Table 1 for our nets (time: this machine, one core, median; paper: NAO V5)\n\n");
-  std::printf("| net | input | parameters (paper) | multiply-adds | µs/patch single | µs/patch batch 16 | paper ms | accuracy | paper accuracy |\n");
+  std::printf(
+      "Table 1 for our nets (time: this machine, one core, median CPU time; paper: NAO V5)\n\n");
+  std::printf(
+      "| net | input | parameters (paper) | multiply-adds | µs/patch single | µs/patch batch 16 | "
+      "paper ms | accuracy | paper accuracy |\n");
   std::printf("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (const cnn::ShippedNet& s : cnn::kShippedNets) {
-    const std::string cfg = models + "/" + s.stem + ".cfg", weights = models + "/" + s.stem + ".weights";
+    const std::string cfg = models + "/" + s.stem + ".cfg",
+                      weights = models + "/" + s.stem + ".weights";
     cnn::Net net = cnn::readDarknetCfg(cfg);
     const bool trained = std::filesystem::exists(weights);
     if (trained) {
@@ -137,16 +153,18 @@ void runTable(const std::string& models, const std::string& data_root) {
     std::string accuracy = trained ? "no held-out data" : "untrained";
     const std::string held_out = data_root + "/" + s.stem;
     if (trained && !data_root.empty() && std::filesystem::is_directory(held_out)) {
-      const cnn::Dataset d = cnn::readDataset(held_out, net.input().width, net.input().height, s.classNames());
+      const cnn::Dataset d =
+          cnn::readDataset(held_out, net.input().width, net.input().height, s.classNames());
       const cnn::Evaluation e = cnn::evaluate(net, d);
       char buf[64];
       std::snprintf(buf, sizeof(buf), "%.3f (%d)", e.accuracy, e.samples);
       accuracy = buf;
     }
-    std::printf("| %s | %dx%dx%d | %zu (%d) | %lld | %.2f | %.2f | %.3f | %s | %.3f |\n", s.name, net.input().width,
-                net.input().height, net.input().channels, net.parameterCount(), s.paper_parameters,
-                static_cast<long long>(net.multiplyAdds()), timePerPatchUs(classifier, 1),
-                timePerPatchUs(classifier, 16), s.paper_time_ms, accuracy.c_str(), s.paper_accuracy);
+    std::printf("| %s | %dx%dx%d | %zu (%d) | %lld | %.2f | %.2f | %.3f | %s | %.3f |\n", s.name,
+                net.input().width, net.input().height, net.input().channels, net.parameterCount(),
+                s.paper_parameters, static_cast<long long>(net.multiplyAdds()),
+                timePerPatchUs(classifier, 1), timePerPatchUs(classifier, 16), s.paper_time_ms,
+                accuracy.c_str(), s.paper_accuracy);
   }
 }
 
@@ -154,22 +172,32 @@ void runTable(const std::string& models, const std::string& data_root) {
 
 void addTrainCommand(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<TrainOptions>();
-  CLI::App* cmd = app.add_subcommand("train", "Train a tiny CNN (Darknet cfg) on a folder of labelled patches");
+  CLI::App* cmd =
+      app.add_subcommand("train", "Train a tiny CNN (Darknet cfg) on a folder of labelled patches");
   cmd->add_option("--cfg", o->cfg, "Darknet cfg of the net")->required();
-  cmd->add_option("--data", o->data, "dataset folder: one sub-folder of PNG patches per class, optional manifest.csv")->required();
+  cmd->add_option("--data", o->data,
+                  "dataset folder: one sub-folder of PNG patches per class, optional manifest.csv")
+      ->required();
   cmd->add_option("--out", o->out, "weights file to write (Darknet format)")->required();
-  cmd->add_option("--classes", o->classes, "class folders in label order, comma-separated (default: sorted)");
-  cmd->add_option("--validation", o->validation, "held-out dataset folder (default: a split of --data)");
+  cmd->add_option("--classes", o->classes,
+                  "class folders in label order, comma-separated (default: sorted)");
+  cmd->add_option("--validation", o->validation,
+                  "held-out dataset folder (default: a split of --data)");
   cmd->add_option("--init", o->init, "start from these weights instead of a seeded initialisation");
   cmd->add_option("--optimizer", o->optimizer, "adam or sgd")->capture_default_str();
   cmd->add_option("--lr", o->params.learning_rate, "learning rate")->capture_default_str();
-  cmd->add_option("--momentum", o->params.momentum, "SGD momentum / Adam beta1")->capture_default_str();
+  cmd->add_option("--momentum", o->params.momentum, "SGD momentum / Adam beta1")
+      ->capture_default_str();
   cmd->add_option("--weight-decay", o->params.weight_decay, "L2 on weights")->capture_default_str();
   cmd->add_option("--batch", o->params.batch_size, "samples per step")->capture_default_str();
   cmd->add_option("--epochs", o->params.max_epochs, "most epochs")->capture_default_str();
-  cmd->add_option("--patience", o->params.patience_epochs, "epochs without improvement before stopping")->capture_default_str();
-  cmd->add_option("--validation-fraction", o->params.validation_fraction, "held out per class")->capture_default_str();
-  cmd->add_option("--seed", o->params.seed, "seed of initialisation, split, order and augmentation")->capture_default_str();
+  cmd->add_option("--patience", o->params.patience_epochs,
+                  "epochs without improvement before stopping")
+      ->capture_default_str();
+  cmd->add_option("--validation-fraction", o->params.validation_fraction, "held out per class")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->params.seed, "seed of initialisation, split, order and augmentation")
+      ->capture_default_str();
   cmd->add_option("--no-flip", o->no_flip, "classes that must not be mirrored");
   cmd->add_flag("--no-balance", o->no_balance, "do not weight the loss by inverse class frequency");
   cmd->add_flag("--no-augment", o->no_augment, "no augmentation");
@@ -178,9 +206,12 @@ void addTrainCommand(CLI::App& app, int& exit_code) {
 
   auto models = std::make_shared<std::string>(cnn::defaultModelDir());
   auto data_root = std::make_shared<std::string>();
-  CLI::App* table = app.add_subcommand("cnn-table", "Print the paper's Table 1 for our nets, timed on this machine");
-  table->add_option("--models", *models, "folder of the nets' cfg and weights")->capture_default_str();
-  table->add_option("--data", *data_root, "folder with one held-out dataset folder per net (robot_net/, ...)");
+  CLI::App* table = app.add_subcommand(
+      "cnn-table", "Print the paper's Table 1 for our nets, timed on this machine");
+  table->add_option("--models", *models, "folder of the nets' cfg and weights")
+      ->capture_default_str();
+  table->add_option("--data", *data_root,
+                    "folder with one held-out dataset folder per net (robot_net/, ...)");
   table->callback([models, data_root, &exit_code] {
     runTable(*models, *data_root);
     exit_code = 0;

@@ -95,7 +95,8 @@ Eigen::Isometry3d isometryFromJson(const Reader& r) {
   const json& rot = r.at("rotation");
   if (!rot.is_array() || rot.size() != 3) r.fail("rotation", "expected 3 rows of 3 numbers");
   for (int i = 0; i < 3; ++i) {
-    if (!rot[i].is_array() || rot[i].size() != 3) r.fail("rotation", "expected 3 rows of 3 numbers");
+    if (!rot[i].is_array() || rot[i].size() != 3)
+      r.fail("rotation", "expected 3 rows of 3 numbers");
     for (int c = 0; c < 3; ++c) t.linear()(i, c) = r.number(rot[i][c], "rotation");
   }
   const Eigen::Matrix3d should_be_identity = t.linear() * t.linear().transpose();

@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <cstdint>
+#include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <numeric>
 
 #include "colorfree/perception/error.h"
@@ -35,6 +39,7 @@ FieldLineParams FieldLineParams::load(const std::string& path) {
   p.merge_max_gap_m = f.getInRange("merge_max_gap_m", 0, 10);
   p.min_line_length_m = f.getInRange("min_line_length_m", 0, 10);
   p.min_line_spots = static_cast<int>(f.getInRange("min_line_spots", 2, 1000));
+  p.extend_max_gap_m = f.getInRange("extend_max_gap_m", 0, 2);
   p.width_trend_min_range = f.getInRange("width_trend_min_range", 1, 100);
   p.min_width_trend = f.getInRange("min_width_trend", -10, 10);
   p.circle_radius_tolerance_m = f.getInRange("circle_radius_tolerance_m", 0, 1);
@@ -48,6 +53,7 @@ FieldLineParams FieldLineParams::load(const std::string& path) {
   p.penalty_mark_max_extent_m = f.getInRange("penalty_mark_max_extent_m", 0.01, 2);
   p.penalty_mark_clear_radius_m = f.getInRange("penalty_mark_clear_radius_m", 0, 5);
   p.penalty_mark_max_distance_m = f.getInRange("penalty_mark_max_distance_m", 0, 20);
+  p.penalty_mark_max_dark_fraction = f.getInRange("penalty_mark_max_dark_fraction", 0, 1);
   p.min_penalty_mark_spots = static_cast<int>(f.getInRange("min_penalty_mark_spots", 1, 100));
   f.finish();
   if (p.min_width_factor >= p.max_width_factor) {
@@ -79,16 +85,38 @@ struct ScanSpot {
   double width = 0;
 };
 
-// Finds bright runs between a rising and a falling edge on one scan line of `n` samples read by
-// `at(i)`; `expected(i)` is the width expected for a line centred at sample i (0: none).
-template <typename At, typename Expected>
-void scanLine(int begin, int end, const At& at, const Expected& expected, const FieldLineParams& p,
-              std::vector<ScanSpot>& out) {
+// First index i in [i, end) where |data[i] - data[i - step]| >= thr, or end. Most of a scan line
+// is carpet without such an edge: 16 pixels are checked at a time where SSE2 is there.
+int nextEdge(const std::uint8_t* data, int i, int end, int step, int thr) {
+#if defined(__SSE2__)
+  const __m128i threshold = _mm_set1_epi8(static_cast<char>(thr));
+  for (; i + 16 <= end; i += 16) {
+    const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(data + i));
+    const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(data + i - step));
+    const __m128i diff = _mm_or_si128(_mm_subs_epu8(a, b), _mm_subs_epu8(b, a));
+    const int mask = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_max_epu8(diff, threshold), diff));
+    if (mask != 0) return i + __builtin_ctz(static_cast<unsigned>(mask));
+  }
+#endif
+  for (; i < end; ++i) {
+    if (std::abs(data[i] - data[i - step]) >= thr) return i;
+  }
+  return end;
+}
+
+// Finds bright runs between a rising and a falling edge on one scan line, `data` in order along
+// it; `expected(i)` is the width expected for a line centred at sample i (0: none).
+template <typename Expected>
+void scanLine(const std::uint8_t* data, int begin, int end, const Expected& expected,
+              const FieldLineParams& p, std::vector<ScanSpot>& out) {
+  const auto at = [data](int i) { return static_cast<int>(data[i]); };
   const int step = p.edge_step_px;
-  const int thr = static_cast<int>(std::ceil(p.min_edge_contrast));
+  const int thr = std::clamp(static_cast<int>(std::ceil(p.min_edge_contrast)), 1, 255);
   int i = begin + step;
   double rise_pos = -1, rise_strength = 0;
   while (i < end) {
+    i = nextEdge(data, i, end, step, thr);
+    if (i >= end) break;
     const int d = at(i) - at(i - step);
     if (d >= thr) {
       // Strongest point of the rising edge.
@@ -200,6 +228,37 @@ double widthAlongScan(const CameraModel& camera, const Eigen::Vector2d& ground,
   return across / cosine;
 }
 
+// A white cross on the carpet has nothing darker than the carpet inside; a ball (its black
+// patches) has. Compares the pixels of a square of the mark's size (a little more, seen from
+// the side it is foreshortened the same way) with the carpet around it.
+bool hasDarkInside(const GrayView& image, const CameraModel& camera, const Eigen::Vector2d& centre,
+                   const Eigen::Vector2d& centre_px, double mark_size_m, const FieldLineParams& p) {
+  // The mark's extent in the image: across (sideways on the ground) and along the view (ahead).
+  const Eigen::Vector2d ahead = centre.normalized();
+  const Eigen::Vector2d side(-ahead.y(), ahead.x());
+  const Eigen::Vector2d a = centre + side * (mark_size_m * 0.6), b = centre + ahead * (mark_size_m * 0.6);
+  const auto a_px = camera.robotToPixel({a.x(), a.y(), 0});
+  const auto b_px = camera.robotToPixel({b.x(), b.y(), 0});
+  if (!a_px || !b_px) return false;
+  const int half_x = std::max(2, static_cast<int>(std::lround(std::abs(a_px->x() - centre_px.x()) + std::abs(b_px->x() - centre_px.x()))));
+  const int half_y = std::max(2, static_cast<int>(std::lround(std::abs(a_px->y() - centre_px.y()) + std::abs(b_px->y() - centre_px.y()))));
+  const int cx = static_cast<int>(centre_px.x()), cy = static_cast<int>(centre_px.y());
+  std::vector<int> ring, inner;
+  int inside = 0;
+  for (int y = cy - 2 * half_y; y <= cy + 2 * half_y; ++y) {
+    for (int x = cx - 2 * half_x; x <= cx + 2 * half_x; x += 2) {
+      if (!image.contains(x, y)) continue;
+      const bool in = std::abs(x - cx) <= half_x && std::abs(y - cy) <= half_y;
+      (in ? inner : ring).push_back(image.at(x, y));
+    }
+  }
+  if (ring.size() < 8 || inner.empty()) return false;
+  std::nth_element(ring.begin(), ring.begin() + ring.size() / 2, ring.end());
+  const double carpet = ring[ring.size() / 2];
+  for (int v : inner) inside += v < carpet - p.min_spot_contrast;
+  return inside > p.penalty_mark_max_dark_fraction * static_cast<double>(inner.size());
+}
+
 struct Piece {
   std::vector<int> ids;
   Fit fit;
@@ -244,20 +303,38 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
   const double lw = field_.line_width_m;
   FieldLineResult out;
 
-  // Expected pixel widths of a line per row, measured at the image's middle column.
+  // Expected pixel widths of a line per row, measured at the image's middle column on every
+  // kWidthRowStep-th row and interpolated between.
   std::vector<double> expected_v(h, 0), expected_h(h, 0);
   const Eigen::Vector3d cam = camera.position();
   const double cx = w / 2.0;
-  for (int y = 0; y < h; ++y) {
+  constexpr int kWidthRowStep = 4;
+  const auto widthsAt = [&](int y, double& v, double& hz) {
+    v = hz = 0;
     const auto g = camera.pixelToGround({cx, y + 0.5});
-    if (!g) continue;
+    if (!g || (*g - cam.head<2>()).norm() > p.max_distance_m) return;
     const Eigen::Vector2d away = (*g - cam.head<2>()).normalized();
-    if ((*g - cam.head<2>()).norm() > p.max_distance_m) continue;
     const Eigen::Vector2d side(-away.y(), away.x());
     const auto a = camera.robotToPixel({g->x() + lw * away.x(), g->y() + lw * away.y(), 0});
     const auto b = camera.robotToPixel({g->x() + lw * side.x(), g->y() + lw * side.y(), 0});
-    if (a) expected_v[y] = std::abs(a->y() - (y + 0.5));
-    if (b) expected_h[y] = std::abs(b->x() - cx);
+    if (a) v = std::abs(a->y() - (y + 0.5));
+    if (b) hz = std::abs(b->x() - cx);
+  };
+  for (int y0 = 0; y0 < h; y0 += kWidthRowStep) {
+    const int y1 = std::min(y0 + kWidthRowStep, h - 1);
+    double v0, h0, v1, h1;
+    widthsAt(y0, v0, h0);
+    widthsAt(y1, v1, h1);
+    for (int y = y0; y < std::min(y0 + kWidthRowStep, h); ++y) {
+      // Rows next to the horizon or the distance limit keep 0 (no line expected).
+      if (v0 <= 0 || v1 <= 0) {
+        if (y == y0) expected_v[y] = v0, expected_h[y] = h0;
+        continue;
+      }
+      const double t = y1 > y0 ? static_cast<double>(y - y0) / (y1 - y0) : 0;
+      expected_v[y] = v0 + t * (v1 - v0);
+      expected_h[y] = h0 + t * (h1 - h0);
+    }
   }
 
   // Vertical scan lines: spots per scan line, kept in order of scan lines.
@@ -276,16 +353,40 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     out.spots.push_back(s);
     return static_cast<int>(out.spots.size()) - 1;
   };
+  // The vertical scan lines copied into contiguous columns, reading the image row by row.
+  const int scan_columns = (w - spacing / 2 + spacing - 1) / spacing;
+  std::vector<std::uint8_t> columns(static_cast<std::size_t>(scan_columns) * h);
+  {
+    const int first_row = *std::min_element(ignore.top_y.begin(), ignore.top_y.end());
+    const int last_row = *std::max_element(ignore.bottom_y.begin(), ignore.bottom_y.end());
+    // Blocks of 16 rows: each column gets 16 bytes in one store, the rows stay in the cache.
+    constexpr int kBlock = 16;
+    const int y_end = std::min(h, last_row);
+    int y = std::max(0, first_row);
+    for (; y + kBlock <= y_end; y += kBlock) {
+      const std::uint8_t* rows[kBlock];
+      for (int r = 0; r < kBlock; ++r) rows[r] = image.row(y + r);
+      for (int c = 0, x = spacing / 2; c < scan_columns; ++c, x += spacing) {
+        std::uint8_t block[kBlock];
+        for (int r = 0; r < kBlock; ++r) block[r] = rows[r][x];
+        std::memcpy(columns.data() + static_cast<std::size_t>(c) * h + y, block, kBlock);
+      }
+    }
+    for (; y < y_end; ++y) {
+      const std::uint8_t* row = image.row(y);
+      for (int c = 0, x = spacing / 2; c < scan_columns; ++c, x += spacing) {
+        columns[static_cast<std::size_t>(c) * h + y] = row[x];
+      }
+    }
+  }
   for (int x = spacing / 2; x < w; x += spacing) {
     vertical_lines.emplace_back();
     const int top = ignore.top_y[x];
     const int bottom = ignore.bottom_y[x];
     if (bottom - top < 3 * p.edge_step_px) continue;
     found.clear();
-    const std::uint8_t* base = image.data + x;
-    const int stride = image.stride;
     scanLine(
-        top, bottom, [&](int y) { return static_cast<int>(base[y * stride]); },
+        columns.data() + static_cast<std::size_t>(x / spacing) * h, top, bottom,
         [&](int y) { return expected_v[std::clamp(y, 0, h - 1)]; }, p, found);
     for (const ScanSpot& s : found) {
       const int id = addSpot({x + 0.5, s.along + 0.5}, s.width,
@@ -293,20 +394,26 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
       if (id >= 0) vertical_lines.back().push_back(id);
     }
   }
+  const int max_top = *std::max_element(ignore.top_y.begin(), ignore.top_y.end());
+  const int min_bottom = *std::min_element(ignore.bottom_y.begin(), ignore.bottom_y.end());
   for (int y = spacing / 2; y < h; y += spacing) {
     horizontal_lines.emplace_back();
     if (expected_h[y] <= 0) continue;
     const std::uint8_t* row = image.row(y);
+    const bool whole_row = y >= max_top && y < min_bottom;
     int x = 0;
     while (x < w) {
-      while (x < w && !ignore.looked(x, y)) ++x;
-      const int begin = x;
-      while (x < w && ignore.looked(x, y)) ++x;
+      int begin = 0;
+      if (whole_row) {
+        x = w;
+      } else {
+        while (x < w && !ignore.looked(x, y)) ++x;
+        begin = x;
+        while (x < w && ignore.looked(x, y)) ++x;
+      }
       if (x - begin < 3 * p.edge_step_px) continue;
       found.clear();
-      scanLine(
-          begin, x, [&](int i) { return static_cast<int>(row[i]); },
-          [&](int) { return expected_h[y]; }, p, found);
+      scanLine(row, begin, x, [&](int) { return expected_h[y]; }, p, found);
       for (const ScanSpot& s : found) {
         const int id = addSpot({s.along + 0.5, y + 0.5}, s.width, expected_h[y], false);
         if (id >= 0) horizontal_lines.back().push_back(id);
@@ -411,7 +518,13 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
   std::vector<char> on_circle(out.spots.size(), 0);
   {
     constexpr double kCell = 0.1;
-    std::map<std::pair<int, int>, int> votes;
+    // Votes counted on a dense grid around the robot (spots are at most max_distance away).
+    const double reach = p.max_distance_m + radius + kCell;
+    const int cells = 2 * static_cast<int>(std::ceil(reach / kCell)) + 1;
+    const int offset = cells / 2;
+    std::vector<std::uint16_t> grid(static_cast<std::size_t>(cells) * cells, 0);
+    std::vector<int> voted;
+    const Eigen::Vector2d origin = cam.head<2>();
     for (const auto& c : long_chains) {
       for (std::size_t i = 0; i < c.size(); ++i) {
         const std::size_t a = i > 0 ? i - 1 : i;
@@ -420,26 +533,28 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
         if (t.norm() < 1e-6) continue;
         const Eigen::Vector2d n = Eigen::Vector2d(-t.y(), t.x()).normalized();
         for (double sgn : {-1.0, 1.0}) {
-          const Eigen::Vector2d centre = out.spots[c[i]].position_in_robot + sgn * radius * n;
-          ++votes[{static_cast<int>(std::floor(centre.x() / kCell)),
-                   static_cast<int>(std::floor(centre.y() / kCell))}];
+          const Eigen::Vector2d centre = out.spots[c[i]].position_in_robot + sgn * radius * n - origin;
+          const int gx = static_cast<int>(std::floor(centre.x() / kCell)) + offset;
+          const int gy = static_cast<int>(std::floor(centre.y() / kCell)) + offset;
+          if (gx < 1 || gy < 1 || gx >= cells - 1 || gy >= cells - 1) continue;
+          const int index = gy * cells + gx;
+          if (grid[index]++ == 0) voted.push_back(index);
         }
       }
     }
     int best_votes = 0;
-    std::pair<int, int> best_cell{0, 0};
-    for (const auto& [cell, count] : votes) {
+    int best_index = 0;
+    for (int index : voted) {
       int sum = 0;
-      for (int dx = -1; dx <= 1; ++dx) {
-        for (int dy = -1; dy <= 1; ++dy) {
-          const auto it = votes.find({cell.first + dx, cell.second + dy});
-          if (it != votes.end()) sum += it->second;
-        }
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) sum += grid[index + dy * cells + dx];
       }
-      if (sum > best_votes) best_votes = sum, best_cell = cell;
+      if (sum > best_votes || (sum == best_votes && index < best_index)) best_votes = sum, best_index = index;
     }
+    const std::pair<int, int> best_cell{best_index % cells - offset, best_index / cells - offset};
     if (best_votes >= p.min_circle_spots) {
-      Eigen::Vector2d centre((best_cell.first + 0.5) * kCell, (best_cell.second + 0.5) * kCell);
+      Eigen::Vector2d centre =
+          origin + Eigen::Vector2d((best_cell.first + 0.5) * kCell, (best_cell.second + 0.5) * kCell);
       bool ok = false;
       // Spots farther away are placed less precisely on the ground.
       const auto inlierDistance = [&](int id) {
@@ -551,6 +666,32 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
         pieces[j].alive = false;
         merged_any = true;
       }
+    }
+  }
+
+  // Spots lost when a chain was split at a corner, or on short pieces, join the line they lie on
+  // (a spot at a corner may serve both lines).
+  for (auto& pc : pieces) {
+    if (!pc.alive) continue;
+    const Fit& f = pc.fit;
+    const Eigen::Vector2d normal(-f.direction.y(), f.direction.x());
+    const double tol = tolerance(f);
+    std::vector<char> own(out.spots.size(), 0);
+    for (int id : pc.ids) own[id] = 1;
+    std::vector<int> ids = pc.ids;
+    for (int id = 0; id < static_cast<int>(out.spots.size()); ++id) {
+      if (own[id] || on_circle[id]) continue;
+      const Eigen::Vector2d d = out.spots[id].position_in_robot - f.centroid;
+      const double t = d.dot(f.direction);
+      if (std::abs(d.dot(normal)) <= tol && t >= f.t_min - p.extend_max_gap_m && t <= f.t_max + p.extend_max_gap_m) {
+        ids.push_back(id);
+      }
+    }
+    if (ids.size() == pc.ids.size()) continue;
+    const Fit grown = fitLine(out.spots, ids);
+    if (grown.max_residual <= tolerance(grown)) {
+      pc.ids = std::move(ids);
+      pc.fit = grown;
     }
   }
 
@@ -693,6 +834,13 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
       }
     }
     if (static_cast<int>(cluster.size()) < p.min_penalty_mark_spots) continue;
+    // A cross is crossed by both vertical and horizontal scan lines.
+    bool vertical = false, horizontal = false;
+    for (int id : cluster) (out.spots[id].vertical_scan ? vertical : horizontal) = true;
+    if (!vertical || !horizontal) {
+      for (int id : cluster) used[id] = 1;
+      continue;
+    }
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int id : cluster) centre += out.spots[id].position_in_robot;
     centre /= static_cast<double>(cluster.size());
@@ -710,9 +858,11 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     }
     for (int id : cluster) used[id] = 1;
     if (!clear) continue;
+    const auto centre_px = camera.robotToPixel({centre.x(), centre.y(), 0});
+    if (!centre_px || hasDarkInside(image, camera, centre, *centre_px, field_.penalty_mark_size_m, p)) continue;
     CircleMarkPercept mark;
     mark.centre_in_robot = centre;
-    if (const auto px = camera.robotToPixel({centre.x(), centre.y(), 0})) mark.centre_px = *px;
+    mark.centre_px = *centre_px;
     out.features.penalty_marks.push_back(mark);
   }
   return out;

@@ -8,11 +8,16 @@
 
 namespace colorfree {
 
+namespace {
+constexpr int kBins = 32;
+}
+
 HighContrastParams HighContrastParams::load(const std::string& path) {
   ParamFile f(path);
   HighContrastParams p;
   p.window_px = static_cast<int>(f.getInRange("window_px", 4, 64));
   p.min_contrast = f.getInRange("min_contrast", 0, 128);
+  p.row_step_px = static_cast<int>(f.getInRange("row_step_px", 1, 8));
   p.dilation_windows = static_cast<int>(f.getInRange("dilation_windows", 0, 8));
   f.finish();
   return p;
@@ -26,41 +31,48 @@ int ContrastRegions::markedCount() const {
   return static_cast<int>(std::count(mask.begin(), mask.end(), std::uint8_t{1}));
 }
 
-OtsuResult otsu(const std::uint32_t* hist) {
+OtsuResult otsuBinned(const std::uint32_t* count, const std::uint32_t* value_sum, int bins) {
   OtsuResult best;
   int lo = 0;
-  while (lo < 256 && hist[lo] == 0) ++lo;
-  int hi = 255;
-  while (hi >= 0 && hist[hi] == 0) --hi;
+  while (lo < bins && count[lo] == 0) ++lo;
+  int hi = bins - 1;
+  while (hi >= 0 && count[hi] == 0) --hi;
   if (lo >= hi) {
-    best.threshold = std::max(lo, 0);
-    best.mean0 = best.mean1 = std::max(lo, 0);
+    if (lo < bins) best.mean0 = best.mean1 = static_cast<double>(value_sum[lo]) / count[lo];
+    best.threshold = static_cast<int>(best.mean0);
     return best;
   }
   double total = 0, total_sum = 0;
-  for (int v = lo; v <= hi; ++v) {
-    total += hist[v];
-    total_sum += static_cast<double>(v) * hist[v];
+  for (int b = lo; b <= hi; ++b) {
+    total += count[b];
+    total_sum += value_sum[b];
   }
   double n0 = 0, sum0 = 0, best_score = -1;
-  for (int t = lo; t < hi; ++t) {
-    n0 += hist[t];
-    sum0 += static_cast<double>(t) * hist[t];
+  int best_bin = lo;
+  for (int b = lo; b < hi; ++b) {
+    n0 += count[b];
+    sum0 += value_sum[b];
+    if (count[b] == 0) continue;  // the same split as the previous bin
     const double n1 = total - n0;
-    if (n0 == 0 || n1 == 0) continue;
-    const double m0 = sum0 / n0;
-    const double m1 = (total_sum - sum0) / n1;
-    // Between-class variance w0 w1 (m1 − m0)², up to the constant 1 / total².
-    const double score = n0 * n1 * (m1 - m0) * (m1 - m0);
+    const double diff = (total_sum - sum0) * n0 - sum0 * n1;  // (m1 − m0) n0 n1
+    // Between-class variance n0 n1 (m1 − m0)², up to the constant 1 / total².
+    const double score = diff * diff / (n0 * n1);
     if (score > best_score) {
       best_score = score;
-      best.threshold = t;
-      best.mean0 = m0;
-      best.mean1 = m1;
+      best_bin = b;
+      best.mean0 = sum0 / n0;
+      best.mean1 = (total_sum - sum0) / n1;
     }
   }
+  best.threshold = best_bin;
   best.between_std = std::sqrt(best_score) / total;
   return best;
+}
+
+OtsuResult otsu(const std::uint32_t* hist) {
+  std::uint32_t value_sum[256];
+  for (int v = 0; v < 256; ++v) value_sum[v] = static_cast<std::uint32_t>(v) * hist[v];
+  return otsuBinned(hist, value_sum, 256);
 }
 
 HighContrastDetector::HighContrastDetector(HighContrastParams params) : params_(params) {}
@@ -80,7 +92,8 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
   out.contrast.assign(n, 0.f);
   const int used_width = out.columns * s;
   const double min_var = params_.min_contrast * params_.min_contrast;
-  const double count = static_cast<double>(s) * s;
+  const int step = params_.row_step_px;
+  const double count = static_cast<double>(s) * ((s + step - 1) / step);
 
   std::vector<std::uint32_t> col_sum(used_width), col_sq(used_width);
   std::vector<std::uint8_t> looked(out.columns);
@@ -95,7 +108,7 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
     // Column sums over the window row, vectorised along x; windows then add up their columns.
     std::fill(col_sum.begin(), col_sum.end(), 0u);
     std::fill(col_sq.begin(), col_sq.end(), 0u);
-    for (int y = r * s; y < (r + 1) * s; ++y) {
+    for (int y = r * s; y < (r + 1) * s; y += step) {
       const std::uint8_t* row = image.row(y);
       std::uint32_t* sum = col_sum.data();
       std::uint32_t* sq = col_sq.data();
@@ -116,12 +129,17 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
       const double var = sq / count - mean * mean;
       // Otsu's between-class variance never exceeds the window's variance.
       if (var < min_var) continue;
-      std::uint32_t hist[256] = {};
-      for (int y = r * s; y < (r + 1) * s; ++y) {
+      // Otsu over 32 bins of 8 gray levels; each bin keeps the sum of its values, so the class
+      // means (and the contrast) are exact for thresholds between bins.
+      std::uint32_t count[kBins] = {}, value_sum[kBins] = {};
+      for (int y = r * s; y < (r + 1) * s; y += step) {
         const std::uint8_t* row = image.row(y) + c * s;
-        for (int x = 0; x < s; ++x) ++hist[row[x]];
+        for (int x = 0; x < s; ++x) {
+          ++count[row[x] >> 3];
+          value_sum[row[x] >> 3] += row[x];
+        }
       }
-      const OtsuResult o = otsu(hist);
+      const OtsuResult o = otsuBinned(count, value_sum, kBins);
       const std::size_t i = static_cast<std::size_t>(r) * out.columns + c;
       out.contrast[i] = static_cast<float>(o.between_std);
       if (o.between_std >= params_.min_contrast) out.seeds[i] = 1;

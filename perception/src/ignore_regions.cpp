@@ -174,7 +174,15 @@ FieldBoundary FieldBoundaryDetector::run(const GrayView& image, const CameraMode
                                     params_.carpet_luminance_tolerance_ratio * carpet_mean);
 
   for (int c = 0; c < columns; ++c) {
+    // The column's own carpet (light changes across the image), unless it has too few blocks.
     double reference = carpet_mean;
+    const int reference_rows = static_cast<int>(rows_below[c] * params_.reference_fraction);
+    if (reference_rows >= 3) {
+      std::vector<float> own;
+      for (int k = 0; k < reference_rows; ++k) own.push_back(stats[static_cast<std::size_t>(c) * block_rows + k].mean);
+      const double m = median(own);
+      if (std::abs(m - carpet_mean) <= tolerance) reference = m;
+    }
     int run = 0;
     int top_row = -1;
     for (int k = 0; k < rows_below[c]; ++k) {

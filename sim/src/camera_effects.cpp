@@ -43,7 +43,8 @@ ExposurePlan::ExposurePlan(const EffectsSpec& effects, int height_px) {
     const double centre = readout * ((r + 0.5) / height_px - 0.5);
     auto& weights = rows_[static_cast<std::size_t>(r)];
     if (exposure <= 0) {
-      const int j = std::clamp(static_cast<int>(std::floor((centre - start) / length)), 0, count - 1);
+      const int j =
+          std::clamp(static_cast<int>(std::floor((centre - start) / length)), 0, count - 1);
       weights = {{j, 1.0f}};
       continue;
     }
@@ -64,8 +65,8 @@ ExposurePlan::ExposurePlan(const EffectsSpec& effects, int height_px) {
 
 FloatImage composeSubframes(const std::vector<GrayImage>& subframes, const ExposurePlan& plan) {
   if (subframes.size() != plan.subframeTimes().size()) {
-    throw Error("camera effects: " + std::to_string(subframes.size()) + " sub-frames for a plan of " +
-                std::to_string(plan.subframeTimes().size()));
+    throw Error("camera effects: " + std::to_string(subframes.size()) +
+                " sub-frames for a plan of " + std::to_string(plan.subframeTimes().size()));
   }
   const int width = subframes.front().width();
   const int height = subframes.front().height();
@@ -85,8 +86,8 @@ FloatImage composeSubframes(const std::vector<GrayImage>& subframes, const Expos
   for (int y = 0; y < height; ++y) {
     float* dst = out.pixels.data() + static_cast<std::size_t>(y) * width;
     for (const auto& [j, w] : plan.rowWeights(y)) {
-      const std::uint8_t* src = subframes[static_cast<std::size_t>(j)].data() +
-                                static_cast<std::size_t>(y) * width;
+      const std::uint8_t* src =
+          subframes[static_cast<std::size_t>(j)].data() + static_cast<std::size_t>(y) * width;
       for (int x = 0; x < width; ++x) dst[x] += w * static_cast<float>(src[x]);
     }
   }
@@ -129,8 +130,8 @@ GrayImage applySensor(const FloatImage& exposure, const EffectsSpec& effects, st
 
 std::uint64_t frameSeed(std::uint64_t scenario_seed, int frame_index) {
   // splitmix64 of the pair: neighbouring seeds and frames give unrelated streams.
-  std::uint64_t z = scenario_seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(frame_index) +
-                    0x632BE59BD9B4E019ULL;
+  std::uint64_t z = scenario_seed * 0x9E3779B97F4A7C15ULL +
+                    static_cast<std::uint64_t>(frame_index) + 0x632BE59BD9B4E019ULL;
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
   return z ^ (z >> 31);

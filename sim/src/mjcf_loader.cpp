@@ -37,7 +37,8 @@ MjModelPtr loadMjcf(const std::string& mjcf,
   std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
   mj_defaultVFS(vfs.get());
   addFile(vfs.get(), kModelFileName, mjcf.data(), mjcf.size(), origin);
-  for (const auto& [name, bytes] : files) addFile(vfs.get(), name, bytes.data(), bytes.size(), origin);
+  for (const auto& [name, bytes] : files)
+    addFile(vfs.get(), name, bytes.data(), bytes.size(), origin);
   char error[1024] = "";
   mjModel* model = nullptr;
   try {

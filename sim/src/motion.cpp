@@ -74,13 +74,16 @@ BallMotionState ballAt(const BallSpec& ball, double radius_m, const Eigen::Quate
     speed = t_s >= t_stop ? 0 : speed0 - a * t;
   }
   const Eigen::Vector2d dir = speed0 > 0 ? Eigen::Vector2d(v0 / speed0) : Eigen::Vector2d::Zero();
-  s.position_m = Eigen::Vector3d(ball.x_m + dir.x() * distance, ball.y_m + dir.y() * distance, radius_m);
+  s.position_m =
+      Eigen::Vector3d(ball.x_m + dir.x() * distance, ball.y_m + dir.y() * distance, radius_m);
   s.velocity_mps = Eigen::Vector3d(dir.x() * speed, dir.y() * speed, 0);
   s.orientation = start;
   if (distance > 0) {
     // Rolling without slip about the horizontal axis perpendicular to the travel: z × direction.
-    const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(dir.x(), dir.y(), 0));
-    s.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(distance / radius_m, axis.normalized())) * start;
+    const Eigen::Vector3d axis =
+        Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(dir.x(), dir.y(), 0));
+    s.orientation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(distance / radius_m, axis.normalized())) * start;
     s.orientation.normalize();
   }
   return s;

@@ -14,11 +14,15 @@ constexpr double kPi = 3.14159265358979323846;
 
 // Mass-less links would be rejected by MuJoCo's compiler; the model is only posed, never
 // simulated, so every jointed body gets the same tiny inertia.
-constexpr const char* kInertial = R"(<inertial pos="0 0 0" mass="0.05" diaginertia="1e-4 1e-4 1e-4"/>)";
+constexpr const char* kInertial =
+    R"(<inertial pos="0 0 0" mass="0.05" diaginertia="1e-4 1e-4 1e-4"/>)";
 
 class Writer {
  public:
-  explicit Writer(const NaoLook& look) : look_(look) { os_.setf(std::ios::fixed); os_.precision(5); }
+  explicit Writer(const NaoLook& look) : look_(look) {
+    os_.setf(std::ios::fixed);
+    os_.precision(8);
+  }
 
   void open(const std::string& body, const Eigen::Vector3d& pos, const char* joint,
             const Eigen::Vector3d& axis) {
@@ -35,7 +39,8 @@ class Writer {
     if (hidden) os_ << " group=\"" << kHiddenGeomGroup << "\"";
     os_ << "/>\n";
   }
-  void capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r, const std::string& mat) {
+  void capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
+               const std::string& mat) {
     geom("capsule", "fromto=\"" + v(a) + " " + v(b) + "\" size=\"" + s(r) + "\"", mat);
   }
   void sphere(const Eigen::Vector3d& p, double r, const std::string& mat) {
@@ -51,8 +56,8 @@ class Writer {
   // Cylinder with its axis along z (zaxis changes it).
   void cylinder(const Eigen::Vector3d& p, double r, double half_len, const std::string& mat,
                 const std::string& zaxis = "0 0 1", bool hidden = false) {
-    geom("cylinder", "pos=\"" + v(p) + "\" size=\"" + s(r) + " " + s(half_len) + "\" zaxis=\"" +
-                         zaxis + "\"",
+    geom("cylinder",
+         "pos=\"" + v(p) + "\" size=\"" + s(r) + " " + s(half_len) + "\" zaxis=\"" + zaxis + "\"",
          mat, hidden);
   }
   void raw(const std::string& text) { os_ << text; }
@@ -61,11 +66,13 @@ class Writer {
   static std::string s(double x) {
     std::ostringstream o;
     o.setf(std::ios::fixed);
-    o.precision(5);
+    o.precision(8);
     o << x;
     return o.str();
   }
-  static std::string v(const Eigen::Vector3d& p) { return s(p.x()) + " " + s(p.y()) + " " + s(p.z()); }
+  static std::string v(const Eigen::Vector3d& p) {
+    return s(p.x()) + " " + s(p.y()) + " " + s(p.z());
+  }
 
  private:
   const NaoLook& look_;
@@ -77,13 +84,14 @@ using V = Eigen::Vector3d;
 
 void writeArm(Writer& w, const NaoDimensions& n, double side) {
   const std::string sp = side > 0 ? "L" : "R";
-  w.open(sp + "_shoulder", V(0, side * n.shoulder_offset_y, n.shoulder_offset_z), (sp + "ShoulderPitch").c_str(),
-         V(0, 1, 0));
+  w.open(sp + "_shoulder", V(0, side * n.shoulder_offset_y, n.shoulder_offset_z),
+         (sp + "ShoulderPitch").c_str(), V(0, 1, 0));
   w.sphere(V(0, 0, 0), 0.042, "nao_grey");
   w.open(sp + "_upper_arm", V(0, 0, 0), (sp + "ShoulderRoll").c_str(), V(0, 0, 1));
-  w.capsule(V(0.015, side * 0.005, 0), V(n.upper_arm_length - 0.025, side * 0.008, 0), 0.033, "nao_white");
-  w.open(sp + "_elbow", V(n.upper_arm_length, side * n.elbow_offset_y, 0), (sp + "ElbowYaw").c_str(),
-         V(1, 0, 0));
+  w.capsule(V(0.015, side * 0.005, 0), V(n.upper_arm_length - 0.025, side * 0.008, 0), 0.033,
+            "nao_white");
+  w.open(sp + "_elbow", V(n.upper_arm_length, side * n.elbow_offset_y, 0),
+         (sp + "ElbowYaw").c_str(), V(1, 0, 0));
   w.sphere(V(0, 0, 0), 0.028, "nao_grey");
   w.open(sp + "_forearm", V(0, 0, 0), (sp + "ElbowRoll").c_str(), V(0, 0, 1));
   w.capsule(V(0.012, 0, 0), V(n.lower_arm_length + 0.01, 0, 0), 0.03, "nao_white");
@@ -139,9 +147,8 @@ std::string naoMjcf(const NaoLook& look) {
   w.raw("<body name=\"" + p + "torso\" mocap=\"true\" pos=\"0 0 0.33\">\n");
   // Chest, jersey over the belly, back pack, pelvis, neck.
   w.ellipsoid(V(-0.008, 0, 0.055), V(0.06, 0.076, 0.07), "nao_white");
-  w.ellipsoid(V(-0.008, 0, 0.0), V(0.065, 0.08, 0.06), look.jersey_material);
+  w.ellipsoid(V(-0.015, 0, 0.0), V(0.055, 0.08, 0.058), look.jersey_material);
   w.box(V(-0.06, 0, 0.04), V(0.012, 0.05, 0.055), "nao_grey");
-  w.sphere(V(0.058, 0, 0.075), 0.012, "nao_dark");
   w.box(V(-0.01, 0, -n.hip_offset_z + 0.025), V(0.045, 0.075, 0.02), "nao_grey");
   w.cylinder(V(0, 0, n.neck_offset_z - 0.012), 0.022, 0.014, "nao_grey");
   w.open("head_yaw", V(0, 0, n.neck_offset_z), "HeadYaw", V(0, 0, 1));
@@ -270,7 +277,8 @@ NaoPosture walkPosture(double phase, double speed_mps) {
     const double d = std::min(std::hypot(x, z), l1 + l2 - 1e-6);
     knee = kPi - std::acos(std::clamp((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0, 1.0));
     const double alpha = std::atan2(x, -z);
-    const double beta = std::acos(std::clamp((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1.0, 1.0));
+    const double beta =
+        std::acos(std::clamp((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1.0, 1.0));
     hip = -(alpha + beta);
     ankle = -(hip + knee);
   };

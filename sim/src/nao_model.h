@@ -23,8 +23,8 @@ struct NaoDimensions {
   double thigh_length = 0.100;
   double tibia_length = 0.1029;
   double foot_height = 0.04519;
-  double sole_front = 0.100;   ///< sole length in front of the ankle
-  double sole_back = 0.050;    ///< behind the ankle
+  double sole_front = 0.100;  ///< sole length in front of the ankle
+  double sole_back = 0.050;   ///< behind the ankle
   double sole_width = 0.089;
   Eigen::Vector3d top_camera_in_head{0.05871, 0, 0.06364};
   double top_camera_pitch_rad = 1.2 * 3.14159265358979323846 / 180;
@@ -35,9 +35,9 @@ inline const NaoDimensions kNao{};
 
 /// How one NAO of the scene looks and is named in the MJCF.
 struct NaoLook {
-  std::string prefix;        ///< name prefix of its bodies, joints, geoms, cameras
+  std::string prefix;  ///< name prefix of its bodies, joints, geoms, cameras
   std::string jersey_material;
-  bool observer = false;     ///< carries the cameras; its head is hidden from its own cameras
+  bool observer = false;  ///< carries the cameras; its head is hidden from its own cameras
 };
 
 /// Geom group of the observer's head, hidden when rendering its cameras.

@@ -19,6 +19,8 @@ SceneSpec sceneSpecFor(const CaseSettings& settings) {
   spec.multisamples = settings.multisamples;
   spec.max_width_px = std::max(spec.max_width_px, settings.width_px);
   spec.max_height_px = std::max(spec.max_height_px, settings.height_px);
+  spec.observer_jersey_gray = settings.observer.jersey_gray;
+  spec.camera_horizontal_fov_deg = settings.camera_horizontal_fov_deg;
   return spec;
 }
 
@@ -26,7 +28,8 @@ bool sameScene(const SceneSpec& a, const SceneSpec& b) {
   return a.robot_count == b.robot_count && a.jersey_gray == b.jersey_gray && a.ball == b.ball &&
          a.lighting == b.lighting && a.seed == b.seed && a.shadows == b.shadows &&
          a.multisamples == b.multisamples && a.max_width_px == b.max_width_px &&
-         a.max_height_px == b.max_height_px;
+         a.max_height_px == b.max_height_px && a.observer_jersey_gray == b.observer_jersey_gray &&
+         a.camera_horizontal_fov_deg == b.camera_horizontal_fov_deg;
 }
 
 double frameTime(const CaseSettings& settings, int frame_index) {
@@ -69,7 +72,7 @@ WorldState scenarioStateAt(const CaseSettings& settings, int frame_index) {
     t.jersey_gray = spec.jersey_gray;
     s.robots.push_back(t);
   }
-  const double radius = FieldDimensions::loadDefault().ballRadius();
+  const double radius = settings.ball_radius_m;
   s.ball.radius_m = radius;
   if (settings.ball) {
     const BallMotionState b =
@@ -104,8 +107,16 @@ SceneRenderer& ScenarioRunner::rendererFor(const CaseSettings& settings) {
   return *renderer_;
 }
 
+double lightingScaleAt(const CaseSettings& settings, int frame_index, double t_s) {
+  double scale = lightingScaleAt(settings.lighting, t_s);
+  if (settings.lighting.preset == LightingPreset::kFlicker) {
+    scale *= flickerScale(settings.seed, frame_index);
+  }
+  return scale;
+}
+
 void ScenarioRunner::setSceneAt(SceneRenderer& renderer, const CaseSettings& settings,
-                                double t_s) const {
+                                int frame_index, double t_s) const {
   renderer.setObserver(robotMotionAt(settings.observer.pose, settings.observer.motion, t_s),
                        headAt(settings.observer.head, t_s));
   for (std::size_t i = 0; i < settings.robots.size(); ++i) {
@@ -113,10 +124,10 @@ void ScenarioRunner::setSceneAt(SceneRenderer& renderer, const CaseSettings& set
     renderer.setRobot(static_cast<int>(i), robotMotionAt(r.pose, r.motion, t_s));
   }
   if (settings.ball) {
-    const double radius = FieldDimensions::loadDefault().ballRadius();
-    renderer.setBall(ballAt(*settings.ball, radius, initialBallOrientation(settings.seed), t_s));
+    renderer.setBall(
+        ballAt(*settings.ball, settings.ball_radius_m, initialBallOrientation(settings.seed), t_s));
   }
-  renderer.setLighting(LightingState{lightingScaleAt(settings.lighting, t_s)});
+  renderer.setLighting(LightingState{lightingScaleAt(settings, frame_index, t_s)});
 }
 
 RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool object_map) {
@@ -135,20 +146,21 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
 
   FloatImage exposure;
   if (plan.isInstant()) {
-    setSceneAt(renderer, settings, t);
+    setSceneAt(renderer, settings, frame_index, t);
     RenderOutput out = renderer.render(settings.camera, w, h, object_map);
     exposure = toFloat(out.gray);
     if (object_map) frame.truth.object_map = std::move(out.object_map);
   } else {
     std::vector<GrayImage> subframes;
     for (double dt : plan.subframeTimes()) {
-      setSceneAt(renderer, settings, t + dt);
+      setSceneAt(renderer, settings, frame_index, t + dt);
       subframes.push_back(renderer.render(settings.camera, w, h, false).gray);
     }
     exposure = composeSubframes(subframes, plan);
     // The truth and the object map are at the frame time (the middle of the exposure).
-    setSceneAt(renderer, settings, t);
-    if (object_map) frame.truth.object_map = renderer.render(settings.camera, w, h, true).object_map;
+    setSceneAt(renderer, settings, frame_index, t);
+    if (object_map)
+      frame.truth.object_map = renderer.render(settings.camera, w, h, true).object_map;
   }
   frame.truth.camera.model = renderer.cameraModel(settings.camera, w, h);
   frame.truth.camera.camera_to_field = renderer.cameraToField(settings.camera);

@@ -21,9 +21,9 @@ constexpr double kDegToRad = std::numbers::pi / 180.0;
 // Lighting preset names as the scenario file spells them (world.h's enum, in order).
 const std::vector<std::pair<std::string, LightingPreset>>& presetNames() {
   static const std::vector<std::pair<std::string, LightingPreset>> kNames = {
-      {"normal", LightingPreset::kNormal},         {"dim", LightingPreset::kDim},
+      {"normal", LightingPreset::kNormal},           {"dim", LightingPreset::kDim},
       {"overexposed", LightingPreset::kOverexposed}, {"directional", LightingPreset::kDirectional},
-      {"uneven", LightingPreset::kUneven},         {"flicker", LightingPreset::kFlicker}};
+      {"uneven", LightingPreset::kUneven},           {"flicker", LightingPreset::kFlicker}};
   return kNames;
 }
 
@@ -44,15 +44,19 @@ class MapReader {
  public:
   MapReader(const YAML::Node& node, std::string path, const std::string& origin)
       : node_(node), path_(std::move(path)), origin_(origin) {
-    if (!node_.IsMap()) fail(node_.Mark(), path_, "expected a mapping of key: value, got " + scalarText(node_));
+    if (!node_.IsMap())
+      fail(node_.Mark(), path_, "expected a mapping of key: value, got " + scalarText(node_));
   }
 
   [[noreturn]] void fail(const YAML::Mark& mark, const std::string& key_path,
                          const std::string& what) const {
-    throw Error(origin_ + ":" + lineOf(mark) + ": " + (key_path.empty() ? "" : key_path + ": ") + what);
+    throw Error(origin_ + ":" + lineOf(mark) + ": " + (key_path.empty() ? "" : key_path + ": ") +
+                what);
   }
 
-  std::string keyPath(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  std::string keyPath(const std::string& key) const {
+    return path_.empty() ? key : path_ + "." + key;
+  }
 
   bool has(const std::string& key) const { return static_cast<bool>(node_[key]); }
 
@@ -71,7 +75,8 @@ class MapReader {
   }
 
   double number(const YAML::Node& value, const std::string& key, double lo, double hi) const {
-    if (!value.IsScalar()) fail(value.Mark(), keyPath(key), "expected a number, got " + scalarText(value));
+    if (!value.IsScalar())
+      fail(value.Mark(), keyPath(key), "expected a number, got " + scalarText(value));
     double v = 0;
     try {
       v = value.as<double>();
@@ -94,8 +99,10 @@ class MapReader {
     return value ? number(value, key, lo, hi) : fallback;
   }
 
-  long long integer(const YAML::Node& value, const std::string& key, long long lo, long long hi) const {
-    if (!value.IsScalar()) fail(value.Mark(), keyPath(key), "expected an integer, got " + scalarText(value));
+  long long integer(const YAML::Node& value, const std::string& key, long long lo,
+                    long long hi) const {
+    if (!value.IsScalar())
+      fail(value.Mark(), keyPath(key), "expected an integer, got " + scalarText(value));
     long long v = 0;
     try {
       v = value.as<long long>();
@@ -129,7 +136,8 @@ class MapReader {
   }
 
   std::string string(const YAML::Node& value, const std::string& key) const {
-    if (!value.IsScalar()) fail(value.Mark(), keyPath(key), "expected a string, got " + scalarText(value));
+    if (!value.IsScalar())
+      fail(value.Mark(), keyPath(key), "expected a string, got " + scalarText(value));
     return value.Scalar();
   }
   std::string string(const std::string& key) { return string(required(key), key); }
@@ -149,7 +157,9 @@ class MapReader {
   void finish() const {
     for (const auto& kv : node_) {
       const std::string key = kv.first.Scalar();
-      if (!used_.count(key)) fail(kv.first.Mark(), keyPath(key), "unknown key");
+      // A key a sweep added has no line of its own: its value (in the sweep list) has one.
+      const YAML::Mark mark = kv.first.Mark().line >= 0 ? kv.first.Mark() : kv.second.Mark();
+      if (!used_.count(key)) fail(mark, keyPath(key), "unknown key");
     }
   }
 
@@ -208,8 +218,9 @@ void parsePosition(MapReader& r, const FieldPose& observer, const FieldDimension
     x_m = observer.x_m + distance * std::cos(observer.heading_rad + bearing);
     y_m = observer.y_m + distance * std::sin(observer.heading_rad + bearing);
     if (std::abs(x_m) > half_x || std::abs(y_m) > half_y) {
-      r.fail(r.node()["distance_m"].Mark(), r.keyPath("distance_m"),
-             "puts it off the carpet at (" + std::to_string(x_m) + ", " + std::to_string(y_m) + ")");
+      r.fail(
+          r.node()["distance_m"].Mark(), r.keyPath("distance_m"),
+          "puts it off the carpet at (" + std::to_string(x_m) + ", " + std::to_string(y_m) + ")");
     }
   } else {
     x_m = r.number("x_m", -half_x, half_x);
@@ -246,6 +257,7 @@ HeadSpec parseHead(MapReader& parent) {
 CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
                        const FieldDimensions& field) {
   CaseSettings s;
+  s.ball_radius_m = field.ballRadius();
   MapReader r(root, "", origin);
   r.required("name");
   r.optional("sweep");
@@ -265,8 +277,10 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
   }
   s.frames = static_cast<int>(r.integer("frames", 1, 100000));
   s.frame_rate_hz = r.number("frame_rate_hz", 0.1, 1000);
-  s.seed = static_cast<std::uint64_t>(
-      r.integer("seed", 0, std::numeric_limits<long long>::max()));
+  s.seed = static_cast<std::uint64_t>(r.integer("seed", 0, std::numeric_limits<long long>::max()));
+  std::string nao = "v5";
+  if (const YAML::Node v = r.optional("nao")) nao = r.choice(v, "nao", {"v5", "v6"});
+  s.camera_horizontal_fov_deg = nao == "v6" ? 56.3 : 60.9;
   s.shadows = r.boolean("shadows", true);
   s.multisamples = static_cast<int>(r.integer("multisamples", 0, 16, 4));
 
@@ -276,6 +290,7 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
     s.observer.pose.y_m = o.number("y_m", -field.carpetHalfWidth(), field.carpetHalfWidth());
     s.observer.pose.heading_rad = o.number("heading_deg", -360, 360) * kDegToRad;
     s.observer.head = parseHead(o);
+    s.observer.jersey_gray = o.number("jersey_gray", 0, 1, 0.5);
     s.observer.motion = parseMotion(o, "motion", 0);
     o.finish();
   }
@@ -318,11 +333,10 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
     for (const auto& [name, p] : presetNames()) {
       if (name == preset) s.lighting.preset = p;
     }
-    s.lighting.scale = l.number("scale", 0, 20, 1.0);
-    // The flicker preset flickers by default; any preset can be made to.
-    const bool flicker = s.lighting.preset == LightingPreset::kFlicker;
-    s.lighting.flicker_amplitude = l.number("flicker_amplitude", 0, 1, flicker ? 0.3 : 0.0);
-    s.lighting.flicker_frequency_hz = l.number("flicker_frequency_hz", 0, 500, flicker ? 3.3 : 0.0);
+    // The world takes 0..10 times a preset's light; scale × (1 + flicker) stays inside.
+    s.lighting.scale = l.number("scale", 0, 6, 1.0);
+    s.lighting.flicker_amplitude = l.number("flicker_amplitude", 0, 0.6, 0.0);
+    s.lighting.flicker_frequency_hz = l.number("flicker_frequency_hz", 0, 500, 0.0);
     l.finish();
   }
 
@@ -340,8 +354,7 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
         static_cast<int>(e.integer("rolling_shutter_bands", 1, 240, x.rolling_shutter_bands));
     e.finish();
     if (x.blur_subframes > 1 && x.exposure_s <= 0) {
-      e.fail(effects.Mark(), "effects.blur_subframes",
-             "motion blur needs exposure_ms > 0");
+      e.fail(effects.Mark(), "effects.blur_subframes", "motion blur needs exposure_ms > 0");
     }
   }
 
@@ -453,9 +466,12 @@ YAML::Node loadYaml(const std::string& text, const std::string& origin) {
 
 std::string motionKindName(MotionSpec::Kind kind) {
   switch (kind) {
-    case MotionSpec::Kind::kStand: return "standing";
-    case MotionSpec::Kind::kWalk: return "walking";
-    case MotionSpec::Kind::kTurn: return "turning";
+    case MotionSpec::Kind::kStand:
+      return "standing";
+    case MotionSpec::Kind::kWalk:
+      return "walking";
+    case MotionSpec::Kind::kTurn:
+      return "turning";
   }
   return "standing";
 }
@@ -463,22 +479,32 @@ std::string motionKindName(MotionSpec::Kind kind) {
 bool Expectation::holds(double value) const {
   if (!std::isfinite(value)) return false;
   switch (comparison) {
-    case Comparison::kGreaterEqual: return value >= bound;
-    case Comparison::kLessEqual: return value <= bound;
-    case Comparison::kGreater: return value > bound;
-    case Comparison::kLess: return value < bound;
-    case Comparison::kEqual: return value == bound;
+    case Comparison::kGreaterEqual:
+      return value >= bound;
+    case Comparison::kLessEqual:
+      return value <= bound;
+    case Comparison::kGreater:
+      return value > bound;
+    case Comparison::kLess:
+      return value < bound;
+    case Comparison::kEqual:
+      return value == bound;
   }
   return false;
 }
 
 std::string comparisonSymbol(Expectation::Comparison comparison) {
   switch (comparison) {
-    case Expectation::Comparison::kGreaterEqual: return ">=";
-    case Expectation::Comparison::kLessEqual: return "<=";
-    case Expectation::Comparison::kGreater: return ">";
-    case Expectation::Comparison::kLess: return "<";
-    case Expectation::Comparison::kEqual: return "==";
+    case Expectation::Comparison::kGreaterEqual:
+      return ">=";
+    case Expectation::Comparison::kLessEqual:
+      return "<=";
+    case Expectation::Comparison::kGreater:
+      return ">";
+    case Expectation::Comparison::kLess:
+      return "<";
+    case Expectation::Comparison::kEqual:
+      return "==";
   }
   return "?";
 }
@@ -503,8 +529,10 @@ Expectation parseExpectation(const std::string& text, const std::string& origin)
   }
   skipSpace();
   static const std::vector<std::pair<std::string, Expectation::Comparison>> kOps = {
-      {">=", Expectation::Comparison::kGreaterEqual}, {"<=", Expectation::Comparison::kLessEqual},
-      {"==", Expectation::Comparison::kEqual},        {">", Expectation::Comparison::kGreater},
+      {">=", Expectation::Comparison::kGreaterEqual},
+      {"<=", Expectation::Comparison::kLessEqual},
+      {"==", Expectation::Comparison::kEqual},
+      {">", Expectation::Comparison::kGreater},
       {"<", Expectation::Comparison::kLess}};
   bool found = false;
   for (const auto& [op, cmp] : kOps) {
@@ -526,7 +554,8 @@ Expectation parseExpectation(const std::string& text, const std::string& origin)
   }
   std::size_t j = used;
   while (j < rest.size() && (rest[j] == ' ' || rest[j] == '\t')) ++j;
-  if (j != rest.size()) throw Error(bad + "has extra text '" + rest.substr(j) + "' after the bound");
+  if (j != rest.size())
+    throw Error(bad + "has extra text '" + rest.substr(j) + "' after the bound");
   if (!std::isfinite(e.bound)) throw Error(bad + "has a bound that is not a finite number");
   return e;
 }
@@ -583,12 +612,14 @@ Scenario Scenario::parse(const std::string& text, const std::string& origin) {
 
     if (const YAML::Node expect = r.optional("expect")) {
       if (!expect.IsSequence()) {
-        r.fail(expect.Mark(), "expect", "expected a list of strings like 'ball.detection_rate >= 0.97'");
+        r.fail(expect.Mark(), "expect",
+               "expected a list of strings like 'ball.detection_rate >= 0.97'");
       }
       for (std::size_t i = 0; i < expect.size(); ++i) {
         const std::string key = "expect[" + std::to_string(i) + "]";
         const std::string where = origin + ":" + lineOf(expect[i].Mark()) + ": " + key;
-        if (!expect[i].IsScalar()) throw Error(where + ": expected a string, got " + scalarText(expect[i]));
+        if (!expect[i].IsScalar())
+          throw Error(where + ": expected a string, got " + scalarText(expect[i]));
         Expectation e = parseExpectation(expect[i].Scalar(), where);
         e.line = expect[i].Mark().line + 1;
         scenario.expect.push_back(e);

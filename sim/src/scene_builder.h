@@ -19,8 +19,8 @@ struct LightBase {
 struct SceneModel {
   std::string mjcf;
   std::map<std::string, std::vector<std::uint8_t>> files;
-  std::vector<LightBase> lights;    ///< in the order of the MJCF's <light> elements
-  float headlight_ambient = 0;      ///< ambient light (grey) before the intensity scale
+  std::vector<LightBase> lights;  ///< in the order of the MJCF's <light> elements
+  float headlight_ambient = 0;    ///< ambient light (grey) before the intensity scale
 };
 
 /// Checks the spec; throws colorfree::Error naming the setting that is impossible.

@@ -3,8 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include <cstring>
 #include <random>
 
 #include "colorfree/perception/error.h"
@@ -19,7 +18,8 @@ constexpr double kPi = 3.14159265358979323846;
 struct Canvas {
   int w, h;
   std::vector<float> v;
-  Canvas(int width, int height, float fill) : w(width), h(height), v(std::size_t(width) * height, fill) {}
+  Canvas(int width, int height, float fill)
+      : w(width), h(height), v(std::size_t(width) * height, fill) {}
   float& at(int x, int y) {
     x = ((x % w) + w) % w;
     y = ((y % h) + h) % h;
@@ -71,8 +71,8 @@ void addStrokes(Canvas& c, std::mt19937_64& rng, int count, double min_len, doub
       const double t = double(s) / steps;
       // Fibres fade towards their tips.
       const double fade = 1.0 - 0.6 * std::abs(2 * t - 1);
-      c.at(int(std::floor(x0 + t * len * std::cos(a))), int(std::floor(y0 + t * len * std::sin(a)))) +=
-          float(delta * fade);
+      c.at(int(std::floor(x0 + t * len * std::cos(a))),
+           int(std::floor(y0 + t * len * std::sin(a)))) += float(delta * fade);
     }
   }
 }
@@ -167,12 +167,24 @@ std::vector<GrayTexture> ballCubeFaces(int face_px) {
             // OpenGL cube-map face directions.
             std::array<double, 3> r;
             switch (f) {
-              case 0: r = {1, -tc, -sc}; break;
-              case 1: r = {-1, -tc, sc}; break;
-              case 2: r = {sc, 1, tc}; break;
-              case 3: r = {sc, -1, -tc}; break;
-              case 4: r = {sc, -tc, 1}; break;
-              default: r = {-sc, -tc, -1}; break;
+              case 0:
+                r = {1, -tc, -sc};
+                break;
+              case 1:
+                r = {-1, -tc, sc};
+                break;
+              case 2:
+                r = {sc, 1, tc};
+                break;
+              case 3:
+                r = {sc, -1, -tc};
+                break;
+              case 4:
+                r = {sc, -tc, 1};
+                break;
+              default:
+                r = {-sc, -tc, -1};
+                break;
             }
             const double n = std::sqrt(dot(r, r));
             for (auto& v : r) v /= n;
@@ -201,7 +213,8 @@ std::vector<GrayTexture> ballCubeFaces(int face_px) {
 GrayTexture hallTexture(HallTexture kind, std::uint64_t seed, int variant, int width_px,
                         int height_px) {
   if (width_px < 8 || height_px < 8) throw Error("hall texture: size must be at least 8 px");
-  std::mt19937_64 rng(seed * 7919 + std::uint64_t(kind) * 104729 + std::uint64_t(variant) * 15485863);
+  std::mt19937_64 rng(seed * 7919 + std::uint64_t(kind) * 104729 +
+                      std::uint64_t(variant) * 15485863);
   std::uniform_real_distribution<double> u(0, 1);
   switch (kind) {
     case HallTexture::kWall: {
@@ -277,12 +290,13 @@ GrayTexture hallTexture(HallTexture kind, std::uint64_t seed, int variant, int w
   throw Error("hall texture: unknown kind");
 }
 
-std::vector<std::uint8_t> encodePng(const GrayTexture& texture) {
-  const cv::Mat m(texture.height, texture.width, CV_8UC1,
-                  const_cast<std::uint8_t*>(texture.pixels.data()));
-  std::vector<std::uint8_t> bytes;
-  if (!cv::imencode(".png", m, bytes, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
-    throw Error("texture: PNG encoding failed");
+std::vector<std::uint8_t> encodeMujocoCustom(const GrayTexture& texture) {
+  std::vector<std::uint8_t> bytes(8 + texture.pixels.size() * 3);
+  const std::int32_t size[2] = {texture.width, texture.height};
+  std::memcpy(bytes.data(), size, sizeof(size));
+  std::uint8_t* rgb = bytes.data() + 8;
+  for (std::size_t i = 0; i < texture.pixels.size(); ++i) {
+    rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = texture.pixels[i];
   }
   return bytes;
 }

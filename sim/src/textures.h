@@ -26,7 +26,8 @@ enum class HallTexture { kWall, kBoard, kFloor, kWood, kCloth, kCeiling };
 GrayTexture hallTexture(HallTexture kind, std::uint64_t seed, int variant, int width_px,
                         int height_px);
 
-/// PNG bytes of the texture (what MuJoCo loads from its virtual file system).
-std::vector<std::uint8_t> encodePng(const GrayTexture& texture);
+/// The texture in MuJoCo's custom texture file format (int32 width, int32 height, then RGB bytes
+/// row by row): what MuJoCo loads from its virtual file system without decoding a PNG.
+std::vector<std::uint8_t> encodeMujocoCustom(const GrayTexture& texture);
 
 }  // namespace colorfree::sim

@@ -1,9 +1,10 @@
 #include "colorfree/sim/world.h"
 
+#include <mujoco/mujoco.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <mujoco/mujoco.h>
 #include <random>
 
 #include "colorfree/perception/error.h"
@@ -48,6 +49,39 @@ NaoHandles findNao(const mjModel* m, const std::string& prefix) {
   return h;
 }
 
+// Objects further outside the view than this may still cast a shadow into it (a standing NAO
+// under a light 35° above the horizon).
+constexpr double kShadowCasterMarginM = 1.0;
+
+// Drops the scene's geoms whose bounding spheres lie outside the camera's view (widened by
+// `margin_m`): llvmpipe transforms and lights every vertex it is given, seen or not.
+void cullOutsideView(mjvScene& scn, const CameraIntrinsics& k, double margin_m) {
+  const mjvGLCamera& c = scn.camera[0];
+  const Eigen::Vector3d pos(c.pos[0], c.pos[1], c.pos[2]);
+  const Eigen::Vector3d forward =
+      Eigen::Vector3d(c.forward[0], c.forward[1], c.forward[2]).normalized();
+  const Eigen::Vector3d up = Eigen::Vector3d(c.up[0], c.up[1], c.up[2]).normalized();
+  const Eigen::Vector3d right = forward.cross(up);
+  const double tan_x = (k.width_px / 2.0) / k.focal_x_px;
+  const double tan_y = (k.height_px / 2.0) / k.focal_y_px;
+  const double sec_x = std::sqrt(1 + tan_x * tan_x), sec_y = std::sqrt(1 + tan_y * tan_y);
+  int kept = 0;
+  for (int i = 0; i < scn.ngeom; ++i) {
+    const mjvGeom& g = scn.geoms[i];
+    bool visible = true;
+    // Planes and decor have no bounding sphere: always drawn.
+    if (g.modelrbound > 0) {
+      const Eigen::Vector3d d = Eigen::Vector3d(g.pos[0], g.pos[1], g.pos[2]) - pos;
+      const double r = g.modelrbound + margin_m;
+      const double z = d.dot(forward);
+      visible = z > -r && std::abs(d.dot(right)) <= z * tan_x + r * sec_x &&
+                std::abs(d.dot(up)) <= z * tan_y + r * sec_y;
+    }
+    if (visible) scn.geoms[kept++] = g;
+  }
+  scn.ngeom = kept;
+}
+
 }  // namespace
 
 LightingPreset lightingPresetFromName(const std::string& name) {
@@ -63,19 +97,26 @@ LightingPreset lightingPresetFromName(const std::string& name) {
 
 std::string lightingPresetName(LightingPreset preset) {
   switch (preset) {
-    case LightingPreset::kNormal: return "normal";
-    case LightingPreset::kDim: return "dim";
-    case LightingPreset::kOverexposed: return "overexposed";
-    case LightingPreset::kDirectional: return "directional";
-    case LightingPreset::kUneven: return "uneven";
-    case LightingPreset::kFlicker: return "flicker";
+    case LightingPreset::kNormal:
+      return "normal";
+    case LightingPreset::kDim:
+      return "dim";
+    case LightingPreset::kOverexposed:
+      return "overexposed";
+    case LightingPreset::kDirectional:
+      return "directional";
+    case LightingPreset::kUneven:
+      return "uneven";
+    case LightingPreset::kFlicker:
+      return "flicker";
   }
   return "normal";
 }
 
 double flickerScale(std::uint64_t seed, int frame_index) {
   // A slow beat between the lamps' 100 Hz and the camera's frame rate, plus rare deep dips.
-  std::mt19937_64 rng(seed * 6364136223846793005ULL + std::uint64_t(frame_index) * 1442695040888963407ULL);
+  std::mt19937_64 rng(seed * 6364136223846793005ULL +
+                      std::uint64_t(frame_index) * 1442695040888963407ULL);
   std::uniform_real_distribution<double> u(0, 1);
   const double beat = 0.85 + 0.15 * std::sin(2 * kPi * frame_index / 7.3 + double(seed % 97));
   const double dip = u(rng) < 0.15 ? 0.65 + 0.2 * u(rng) : 1.0;
@@ -92,7 +133,9 @@ struct World::Impl {
   mjvOption opt;
   mjvCamera cam;
   mjrContext con;
-  bool scene_made = false, context_made = false;
+  // The object map is drawn without anti-aliasing: a second renderer context without MSAA.
+  mjrContext con_segment;
+  bool scene_made = false, context_made = false, segment_context_made = false;
   std::vector<std::uint16_t> geom_label;
   NaoHandles observer;
   std::vector<NaoHandles> robots;
@@ -102,10 +145,9 @@ struct World::Impl {
   std::vector<std::uint8_t> rgb;
 
   ~Impl() {
-    if (context_made) {
-      gl->makeCurrent();
-      mjr_freeContext(&con);
-    }
+    if (context_made || segment_context_made) gl->makeCurrent();
+    if (context_made) mjr_freeContext(&con);
+    if (segment_context_made) mjr_freeContext(&con_segment);
     if (scene_made) mjv_freeScene(&scn);
     if (data != nullptr) mj_deleteData(data);
   }
@@ -124,7 +166,8 @@ struct World::Impl {
     const auto& joints = naoJoints();
     for (std::size_t i = 0; i < joints.size(); ++i) {
       const double a = s.posture.*(joints[i].angle);
-      if (!std::isfinite(a)) throw Error(std::string("world: joint ") + joints[i].name + " is not finite");
+      if (!std::isfinite(a))
+        throw Error(std::string("world: joint ") + joints[i].name + " is not finite");
       data->qpos[h.qpos[i]] = a;
     }
   }
@@ -171,11 +214,16 @@ World::World(const SceneSpec& spec) : impl_(std::make_unique<Impl>()) {
   for (int g = 0; g < m->ngeom; ++g) {
     const char* name = mj_id2name(m, mjOBJ_GEOM, g);
     std::uint16_t label = kObjectNone;
-    if (startsWith(name, kCarpetPrefix)) label = kObjectCarpet;
-    else if (startsWith(name, kLinePrefix)) label = kObjectLine;
-    else if (startsWith(name, kGoalPrefix)) label = kObjectGoal;
-    else if (startsWith(name, kBallPrefix)) label = kObjectBall;
-    else if (startsWith(name, kObserverPrefix)) label = kObjectOwnBody;
+    if (startsWith(name, kCarpetPrefix))
+      label = kObjectCarpet;
+    else if (startsWith(name, kLinePrefix))
+      label = kObjectLine;
+    else if (startsWith(name, kGoalPrefix))
+      label = kObjectGoal;
+    else if (startsWith(name, kBallPrefix))
+      label = kObjectBall;
+    else if (startsWith(name, kObserverPrefix))
+      label = kObjectOwnBody;
     for (int i = 0; i < spec.robot_count; ++i) {
       if (startsWith(name, robot_prefixes[i].c_str())) label = std::uint16_t(kObjectRobotBase + i);
     }
@@ -185,8 +233,10 @@ World::World(const SceneSpec& spec) : impl_(std::make_unique<Impl>()) {
   w.observer = findNao(m, kObserverPrefix);
   for (int i = 0; i < spec.robot_count; ++i) w.robots.push_back(findNao(m, robotPrefix(i)));
   if (spec.ball) w.ball_mocap = m->body_mocapid[mj_name2id(m, mjOBJ_BODY, "ball")];
-  w.camera_id[0] = mj_name2id(m, mjOBJ_CAMERA, (std::string(kObserverPrefix) + "top_camera").c_str());
-  w.camera_id[1] = mj_name2id(m, mjOBJ_CAMERA, (std::string(kObserverPrefix) + "bottom_camera").c_str());
+  w.camera_id[0] =
+      mj_name2id(m, mjOBJ_CAMERA, (std::string(kObserverPrefix) + "top_camera").c_str());
+  w.camera_id[1] =
+      mj_name2id(m, mjOBJ_CAMERA, (std::string(kObserverPrefix) + "bottom_camera").c_str());
   if (w.camera_id[0] < 0 || w.camera_id[1] < 0) throw Error("world: the observer has no cameras");
 
   // Robots start off the field, side by side, until placed.
@@ -197,7 +247,8 @@ World::World(const SceneSpec& spec) : impl_(std::make_unique<Impl>()) {
     s.pose.y_m = spec.field.carpetHalfWidth() + 0.3;
     setRobot(i, s);
   }
-  if (spec.ball) setBall(Eigen::Vector3d(0, 0, spec.field.ballRadius()), Eigen::Quaterniond::Identity());
+  if (spec.ball)
+    setBall(Eigen::Vector3d(0, 0, spec.field.ballRadius()), Eigen::Quaterniond::Identity());
 
   w.gl = GlContext::create(spec.max_width_px, spec.max_height_px);
   mjv_defaultScene(&w.scn);
@@ -211,6 +262,18 @@ World::World(const SceneSpec& spec) : impl_(std::make_unique<Impl>()) {
   w.context_made = true;
   mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   if (w.con.currentBuffer != mjFB_OFFSCREEN) throw Error("world: no off-screen framebuffer");
+  // The object map's context: no MSAA, and the smallest shadow map (it draws no shadows).
+  const int samples = m->vis.quality.offsamples, shadow_px = m->vis.quality.shadowsize;
+  m->vis.quality.offsamples = 0;
+  m->vis.quality.shadowsize = 1;
+  mjr_defaultContext(&w.con_segment);
+  mjr_makeContext(m, &w.con_segment, mjFONTSCALE_100);
+  w.segment_context_made = true;
+  m->vis.quality.offsamples = samples;
+  m->vis.quality.shadowsize = shadow_px;
+  mjr_setBuffer(mjFB_OFFSCREEN, &w.con_segment);
+  if (w.con_segment.currentBuffer != mjFB_OFFSCREEN)
+    throw Error("world: no off-screen framebuffer");
   if (w.con.offWidth < spec.max_width_px || w.con.offHeight < spec.max_height_px) {
     throw Error("world: off-screen framebuffer is smaller than asked for");
   }
@@ -239,7 +302,8 @@ void World::setRobot(int index, const NaoState& robot) {
 
 void World::setBall(const Eigen::Vector3d& centre, const Eigen::Quaterniond& orientation) {
   if (impl_->ball_mocap < 0) throw Error("world: the scene has no ball");
-  if (!centre.allFinite() || !orientation.coeffs().allFinite()) throw Error("world: ball pose is not finite");
+  if (!centre.allFinite() || !orientation.coeffs().allFinite())
+    throw Error("world: ball pose is not finite");
   const Eigen::Quaterniond q = orientation.normalized();
   mjtNum* pos = impl_->data->mocap_pos + 3 * impl_->ball_mocap;
   mjtNum* quat = impl_->data->mocap_quat + 4 * impl_->ball_mocap;
@@ -264,7 +328,8 @@ void World::setLighting(const LightingState& lighting) {
       m->light_specular[3 * i + c] = float(bases[i].specular[c] * k);
     }
   }
-  for (int c = 0; c < 3; ++c) m->vis.headlight.ambient[c] = float(impl_->scene.headlight_ambient * k);
+  for (int c = 0; c < 3; ++c)
+    m->vis.headlight.ambient[c] = float(impl_->scene.headlight_ambient * k);
 }
 
 CameraModel World::cameraModel(NaoCamera camera, int width_px, int height_px) const {
@@ -275,14 +340,16 @@ CameraModel World::cameraModel(NaoCamera camera, int width_px, int height_px) co
   return CameraModel(k, camera_to_robot);
 }
 
-Eigen::Isometry3d World::cameraToField(NaoCamera camera) const { return impl_->cameraToField(camera); }
+Eigen::Isometry3d World::cameraToField(NaoCamera camera) const {
+  return impl_->cameraToField(camera);
+}
 
 RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool object_map) {
   Impl& w = *impl_;
   if (width_px <= 0 || height_px <= 0 || width_px > w.spec.max_width_px ||
       height_px > w.spec.max_height_px) {
-    throw Error("world: cannot render " + std::to_string(width_px) + "x" + std::to_string(height_px) +
-                " in a " + std::to_string(w.spec.max_width_px) + "x" +
+    throw Error("world: cannot render " + std::to_string(width_px) + "x" +
+                std::to_string(height_px) + " in a " + std::to_string(w.spec.max_width_px) + "x" +
                 std::to_string(w.spec.max_height_px) + " off-screen buffer");
   }
   mjModel* m = w.model.get();
@@ -295,14 +362,15 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
   w.cam.fixedcamid = id;
 
   w.gl->makeCurrent();
-  mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   w.scn.flags[mjRND_SHADOW] = w.spec.shadows ? 1 : 0;
   w.scn.flags[mjRND_SKYBOX] = 0;
   w.scn.flags[mjRND_REFLECTION] = 0;
   w.scn.flags[mjRND_SEGMENT] = 0;
   w.scn.flags[mjRND_IDCOLOR] = 0;
   mjv_updateScene(m, w.data, &w.opt, nullptr, &w.cam, mjCAT_ALL, &w.scn);
+  cullOutsideView(w.scn, k, w.spec.shadows ? kShadowCasterMarginM : 0.0);
   const mjrRect viewport{0, 0, width_px, height_px};
+  mjr_setBuffer(mjFB_OFFSCREEN, &w.con);
   mjr_render(viewport, &w.scn, &w.con);
   mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con);
 
@@ -322,16 +390,20 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
     w.scn.flags[mjRND_SHADOW] = 0;
     w.scn.flags[mjRND_SEGMENT] = 1;
     w.scn.flags[mjRND_IDCOLOR] = 1;
-    mjr_render(viewport, &w.scn, &w.con);
-    mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con);
+    mjr_setBuffer(mjFB_OFFSCREEN, &w.con_segment);
+    mjr_render(viewport, &w.scn, &w.con_segment);
+    mjr_readPixels(w.rgb.data(), nullptr, viewport, &w.con_segment);
     w.scn.flags[mjRND_SEGMENT] = 0;
     w.scn.flags[mjRND_IDCOLOR] = 0;
     // segid + 1 per pixel; segid indexes the scene's geoms.
-    std::vector<std::uint16_t> seg_label(std::size_t(w.scn.ngeom) + 1, kObjectNone);
+    int max_segid = 0;
+    for (int i = 0; i < w.scn.ngeom; ++i) max_segid = std::max(max_segid, w.scn.geoms[i].segid);
+    std::vector<std::uint16_t> seg_label(std::size_t(max_segid) + 2, kObjectNone);
     for (int i = 0; i < w.scn.ngeom; ++i) {
       const mjvGeom& g = w.scn.geoms[i];
       if (g.segid < 0 || g.objtype != mjOBJ_GEOM || g.objid < 0 || g.objid >= m->ngeom) continue;
-      if (std::size_t(g.segid) + 1 < seg_label.size()) seg_label[g.segid + 1] = w.geom_label[g.objid];
+      if (std::size_t(g.segid) + 1 < seg_label.size())
+        seg_label[g.segid + 1] = w.geom_label[g.objid];
     }
     out.object_map.width = width_px;
     out.object_map.height = height_px;
@@ -340,10 +412,12 @@ RenderOutput World::render(NaoCamera camera, int width_px, int height_px, bool o
       const std::uint8_t* src = w.rgb.data() + std::size_t(height_px - 1 - y) * width_px * 3;
       std::uint16_t* dst = out.object_map.labels.data() + std::size_t(y) * width_px;
       for (int x = 0; x < width_px; ++x) {
-        const std::size_t id_plus_one = std::size_t(src[3 * x]) | (std::size_t(src[3 * x + 1]) << 8) |
+        const std::size_t id_plus_one = std::size_t(src[3 * x]) |
+                                        (std::size_t(src[3 * x + 1]) << 8) |
                                         (std::size_t(src[3 * x + 2]) << 16);
         if (id_plus_one >= seg_label.size()) {
-          throw Error("world: segmentation rendering gave an unknown id " + std::to_string(id_plus_one));
+          throw Error("world: segmentation rendering gave an unknown id " +
+                      std::to_string(id_plus_one));
         }
         dst[x] = seg_label[id_plus_one];
       }

@@ -38,9 +38,9 @@ std::vector<float> randomInputs(const Shape& s, int count) {
 }
 
 void perPatch(benchmark::State& state, int batch) {
-  state.counters["us_per_patch"] = benchmark::Counter(
-      static_cast<double>(state.iterations()) * batch * 1e-6,
-      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["us_per_patch"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * batch * 1e-6,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 void ours(benchmark::State& state, const std::string& name) {
@@ -103,10 +103,14 @@ const char* const kNets[] = {"robot_net", "boost_ball_net", "ball_net", "ori_boo
 int registerAll() {
   for (const char* name : kNets) {
     const std::string n = name;
-    benchmark::RegisterBenchmark(("colorfree/" + n).c_str(), [n](benchmark::State& s) { ours(s, n); })
-        ->Arg(1)->Arg(16);
-    benchmark::RegisterBenchmark(("cv_dnn/" + n).c_str(), [n](benchmark::State& s) { opencv(s, n); })
-        ->Arg(1)->Arg(16);
+    benchmark::RegisterBenchmark(("colorfree/" + n).c_str(),
+                                 [n](benchmark::State& s) { ours(s, n); })
+        ->Arg(1)
+        ->Arg(16);
+    benchmark::RegisterBenchmark(("cv_dnn/" + n).c_str(),
+                                 [n](benchmark::State& s) { opencv(s, n); })
+        ->Arg(1)
+        ->Arg(16);
   }
   benchmark::RegisterBenchmark("extract_patch", extraction)->Arg(12)->Arg(24);
   return 0;

@@ -39,10 +39,12 @@ int main(int argc, char** argv) {
     const float angle = 6.2832f * u(rng), offset = side * (u(rng) - 0.5f);
     for (int y = 0; y < side; ++y) {
       for (int x = 0; x < side; ++x) {
-        const bool dark = s.label == 1
-                              ? std::hypot(x + 0.5f - cx, y + 0.5f - cy) < r
-                              : (x - side / 2) * std::cos(angle) + (y - side / 2) * std::sin(angle) > offset;
-        s.patch.at(x, y) = static_cast<std::uint8_t>(std::clamp((dark ? fg : bg) + noise(rng), 0.0f, 255.0f));
+        const bool dark =
+            s.label == 1
+                ? std::hypot(x + 0.5f - cx, y + 0.5f - cy) < r
+                : (x - side / 2) * std::cos(angle) + (y - side / 2) * std::sin(angle) > offset;
+        s.patch.at(x, y) =
+            static_cast<std::uint8_t>(std::clamp((dark ? fg : bg) + noise(rng), 0.0f, 255.0f));
       }
     }
     s.origin.scenario = "synthetic";

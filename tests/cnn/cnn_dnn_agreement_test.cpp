@@ -111,7 +111,8 @@ activation=linear
 )";
   Net net = parseDarknetCfg(cfg, "inline");
   net.initialise(5);
-  for (int count : {1, 17}) EXPECT_LT(maxDifference(net, count, 3, "options"), test::kCnnTolerance) << count;
+  for (int count : {1, 17})
+    EXPECT_LT(maxDifference(net, count, 3, "options"), test::kCnnTolerance) << count;
 }
 
 }  // namespace

@@ -49,6 +49,8 @@ const Case kCases[] = {
      "[connected]\noutput=3\nactivation=linear\n[softmax]\n"},
 };
 
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
 class CnnGradient : public ::testing::TestWithParam<Case> {};
 
 TEST_P(CnnGradient, MatchesCentralDifferences) {
@@ -58,7 +60,8 @@ TEST_P(CnnGradient, MatchesCentralDifferences) {
   std::normal_distribution<float> normal(0.0f, 1.0f);
   // Biases away from zero so that they matter, and 18 samples: one full and one ragged lane batch.
   for (const Layer& l : net.layers()) {
-    for (int o = 0; o < (l.param_count ? l.filters : 0); ++o) net.params()[l.param_offset + o] = 0.3f * normal(rng);
+    for (int o = 0; o < (l.param_count ? l.filters : 0); ++o)
+      net.params()[l.param_offset + o] = 0.3f * normal(rng);
   }
   const int count = 18, n = net.input().size();
   std::vector<float> inputs(static_cast<std::size_t>(count) * n);
@@ -71,7 +74,8 @@ TEST_P(CnnGradient, MatchesCentralDifferences) {
     weights[i] = weight(rng);
   }
   std::vector<float> grad, input_grad, scratch;
-  const double loss = lossAndGradient(net, inputs.data(), labels.data(), weights.data(), count, grad, &input_grad);
+  const double loss =
+      lossAndGradient(net, inputs.data(), labels.data(), weights.data(), count, grad, &input_grad);
   EXPECT_GT(loss, 0.0);
   const auto lossAt = [&]() {
     return lossAndGradient(net, inputs.data(), labels.data(), weights.data(), count, scratch);
@@ -87,7 +91,8 @@ TEST_P(CnnGradient, MatchesCentralDifferences) {
     p = saved;
     const double numeric = (up - down) / (2.0 * kStep);
     largest = std::max(largest, std::abs(numeric));
-    EXPECT_NEAR(grad[i], numeric, kAbsTolerance + kRelTolerance * std::abs(numeric)) << "parameter " << i;
+    EXPECT_NEAR(grad[i], numeric, kAbsTolerance + kRelTolerance * std::abs(numeric))
+        << "parameter " << i;
   }
   EXPECT_GT(largest, 1e-2);  // the check is not vacuous
   for (std::size_t i = 0; i < inputs.size(); ++i) {
@@ -98,7 +103,8 @@ TEST_P(CnnGradient, MatchesCentralDifferences) {
     const double down = lossAt();
     inputs[i] = saved;
     const double numeric = (up - down) / (2.0 * kStep);
-    EXPECT_NEAR(input_grad[i], numeric, kAbsTolerance + kRelTolerance * std::abs(numeric)) << "input " << i;
+    EXPECT_NEAR(input_grad[i], numeric, kAbsTolerance + kRelTolerance * std::abs(numeric))
+        << "input " << i;
   }
 }
 

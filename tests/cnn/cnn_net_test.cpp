@@ -29,7 +29,8 @@ void expectError(F&& f, std::initializer_list<std::string> parts) {
     f();
     ADD_FAILURE() << "no colorfree::Error thrown";
   } catch (const Error& e) {
-    for (const auto& p : parts) EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+    for (const auto& p : parts)
+      EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
   }
 }
 
@@ -41,8 +42,8 @@ struct PaperNet {
 };
 
 constexpr PaperNet kPaperNets[] = {
-    {"robot_net.cfg", 24, 2, 884},   {"boost_ball_net.cfg", 12, 2, 125},
-    {"ball_net.cfg", 26, 2, 444},    {"ori_boost_net.cfg", 12, 2, 246},
+    {"robot_net.cfg", 24, 2, 884}, {"boost_ball_net.cfg", 12, 2, 125},
+    {"ball_net.cfg", 26, 2, 444},  {"ori_boost_net.cfg", 12, 2, 246},
     {"ori_net.cfg", 24, 3, 657},
 };
 
@@ -58,14 +59,16 @@ TEST(CnnNet, ShippedNetsHaveThePapersSizesAndParameterCounts) {
     EXPECT_LT(ratio, 1.06) << net.parameterCount();
     // Extended Fire modules: at least one route concatenating two or more branches.
     bool has_fire = false;
-    for (const Layer& l : net.layers()) has_fire |= l.type == LayerType::kRoute && l.inputs.size() >= 2;
+    for (const Layer& l : net.layers())
+      has_fire |= l.type == LayerType::kRoute && l.inputs.size() >= 2;
     EXPECT_TRUE(has_fire);
     EXPECT_EQ(net.layers().back().type, LayerType::kSoftmax);
   }
 }
 
 TEST(CnnNet, ParameterCountOfAHandCountedNet) {
-  // conv 3x3 1->4: 4*(9+1)=40; route; conv 1x1 4->2 on 8x8: 2*(4+1)=10; connected 2*4*4 -> 3: 3*(32+1)=99.
+  // conv 3x3 1->4: 4*(9+1)=40; route; conv 1x1 4->2 on 8x8: 2*(4+1)=10; connected 2*4*4 -> 3:
+  // 3*(32+1)=99.
   const Net net = parseDarknetCfg(
       "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=4\nsize=3\npad=1\n"
       "activation=leaky\n[convolutional]\nfilters=2\nsize=1\n[maxpool]\nsize=2\nstride=2\n"
@@ -136,9 +139,11 @@ TEST_F(CnnBadFiles, NonFiniteWeight) {
 TEST_F(CnnBadFiles, UnknownLayerAndKeys) {
   writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[shortcut]\nfrom=-3\n");
   expectError([&] { readDarknetCfg(cfg_); }, {cfg_ + ":5", "[shortcut]", "not supported"});
-  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=2\nsize=3\nflip=1\n");
+  writeText(cfg_,
+            "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=2\nsize=3\nflip=1\n");
   expectError([&] { readDarknetCfg(cfg_); }, {cfg_ + ":8", "flip"});
-  writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=2\nactivation=mish\n");
+  writeText(cfg_,
+            "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=2\nactivation=mish\n");
   expectError([&] { readDarknetCfg(cfg_); }, {cfg_, "mish"});
   writeText(cfg_, "[net]\nwidth=8\nheight=8\nchannels=1\n[convolutional]\nfilters=x2\n");
   expectError([&] { readDarknetCfg(cfg_); }, {cfg_ + ":6", "not an integer"});
@@ -177,8 +182,20 @@ TEST(CnnPatch, ExtractsAndNormalises) {
   // Outside the image: the border repeats.
   extractPatch(image.view(), {-20, -20, 8, 8}, 8, 8, PatchNormalization::kUnitRange, out);
   EXPECT_FLOAT_EQ(out[63], 0.0f);
-  expectError([&] { extractPatch(image.view(), {0, 0, 0, 8}, 8, 8, PatchNormalization::kUnitRange, out); },
-              {"positive size"});
+  // Past the right and bottom border: the last column repeats.
+  extractPatch(image.view(), {35, 25, 8, 8}, 8, 8, PatchNormalization::kUnitRange, out);
+  EXPECT_FLOAT_EQ(out[3], 38 * 5 / 255.0f);
+  EXPECT_FLOAT_EQ(out[4], 39 * 5 / 255.0f);
+  EXPECT_FLOAT_EQ(out[63], 39 * 5 / 255.0f);
+  // A one-pixel-wide image.
+  GrayImage column(1, 4, 100);
+  extractPatch(column.view(), {0, 0, 1, 4}, 2, 2, PatchNormalization::kUnitRange, out);
+  EXPECT_FLOAT_EQ(out[3], 100 / 255.0f);
+  expectError(
+      [&] {
+        extractPatch(image.view(), {0, 0, 0, 8}, 8, 8, PatchNormalization::kUnitRange, out);
+      },
+      {"positive size"});
 }
 
 TEST(CnnClassifier, SinglePatchesAndBatchesGiveTheSameProbabilities) {

@@ -34,9 +34,12 @@ Dataset discDataset(int side, int count, std::uint64_t seed) {
     const float angle = 6.2832f * u(rng), offset = side * (u(rng) - 0.5f);
     for (int y = 0; y < side; ++y) {
       for (int x = 0; x < side; ++x) {
-        const bool dark = s.label == 1 ? std::hypot(x + 0.5f - cx, y + 0.5f - cy) < r
-                                       : (x - side / 2) * std::cos(angle) + (y - side / 2) * std::sin(angle) > offset;
-        s.patch.at(x, y) = static_cast<std::uint8_t>(std::clamp((dark ? fg : bg) + noise(rng), 0.0f, 255.0f));
+        const bool dark =
+            s.label == 1
+                ? std::hypot(x + 0.5f - cx, y + 0.5f - cy) < r
+                : (x - side / 2) * std::cos(angle) + (y - side / 2) * std::sin(angle) > offset;
+        s.patch.at(x, y) =
+            static_cast<std::uint8_t>(std::clamp((dark ? fg : bg) + noise(rng), 0.0f, 255.0f));
       }
     }
     s.origin.scenario = "synthetic";
@@ -60,7 +63,8 @@ Dataset sideDataset(int side, int count, std::uint64_t seed) {
     for (int y = 0; y < side; ++y) {
       for (int x = 0; x < side; ++x) {
         const bool bright = (x < side / 2) == (s.label == 0);
-        s.patch.at(x, y) = static_cast<std::uint8_t>(std::clamp((bright ? 180.0f : 70.0f) + noise(rng), 0.0f, 255.0f));
+        s.patch.at(x, y) = static_cast<std::uint8_t>(
+            std::clamp((bright ? 180.0f : 70.0f) + noise(rng), 0.0f, 255.0f));
       }
     }
     d.samples.push_back(std::move(s));
@@ -159,15 +163,16 @@ TEST(CnnTrainer, RejectsDataThatDoesNotFitTheNet) {
   Dataset one_class = discDataset(12, 40, 1);
   for (Sample& s : one_class.samples) s.label = 0;
   EXPECT_THROW(train(boostNet(1), one_class, p), Error);
-  EXPECT_THROW(train(readDarknetCfg(defaultModelDir() + "/ori_boost_net.cfg"), discDataset(12, 40, 1),
-                     Dataset{12, 12, {"a", "b", "c"}, {}}, p),
+  EXPECT_THROW(train(readDarknetCfg(defaultModelDir() + "/ori_boost_net.cfg"),
+                     discDataset(12, 40, 1), Dataset{12, 12, {"a", "b", "c"}, {}}, p),
                Error);
 }
 
 class CnnDataset : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = ::testing::TempDir() + "/cnn_dataset_" + ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    dir_ = ::testing::TempDir() + "/cnn_dataset_" +
+           ::testing::UnitTest::GetInstance()->current_test_info()->name();
     std::filesystem::remove_all(dir_);
   }
   std::string dir_;

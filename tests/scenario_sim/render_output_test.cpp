@@ -26,7 +26,9 @@ class TimeRenderer : public SceneRenderer {
   CameraModel cameraModel(NaoCamera, int w, int h) const override {
     return CameraModel(CameraIntrinsics::fromHorizontalFov(w, h, 1.0), CameraPose{});
   }
-  Eigen::Isometry3d cameraToField(NaoCamera) const override { return Eigen::Isometry3d::Identity(); }
+  Eigen::Isometry3d cameraToField(NaoCamera) const override {
+    return Eigen::Isometry3d::Identity();
+  }
   RenderOutput render(NaoCamera, int w, int h, bool object_map) override {
     if (++renders_ == fail_at_) throw Error("renderer failed on purpose");
     RenderOutput out;
@@ -70,8 +72,9 @@ class RenderOutputTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("colorfree_render_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+           ("colorfree_render_test_" +
+            std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -88,10 +91,11 @@ TEST_F(RenderOutputTest, WritesFramesTruthAndObjectMapsPerCase) {
   options.out_dir = (dir_ / "out").string();
   options.object_maps = true;
   int calls = 0;
-  const int written = renderToDirectory(runner, options, [&](int done, int total, const RenderedFrame&) {
-    EXPECT_EQ(done, ++calls);
-    EXPECT_EQ(total, 6);
-  });
+  const int written =
+      renderToDirectory(runner, options, [&](int done, int total, const RenderedFrame&) {
+        EXPECT_EQ(done, ++calls);
+        EXPECT_EQ(total, 6);
+      });
   EXPECT_EQ(written, 6);
   EXPECT_EQ(entries(), 1);  // no temporary folder left
   for (const char* c : {"case_000", "case_001"}) {

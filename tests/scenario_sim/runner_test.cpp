@@ -57,7 +57,8 @@ class FakeRenderer : public SceneRenderer {
     for (int y = 0; y < h; ++y) {
       if (spec_.ball && column >= 0 && column < w) {
         out.gray.at(column, y) = 220;
-        if (object_map) out.object_map.labels[static_cast<std::size_t>(y) * w + column] = kObjectBall;
+        if (object_map)
+          out.object_map.labels[static_cast<std::size_t>(y) * w + column] = kObjectBall;
       }
     }
     return out;
@@ -139,11 +140,10 @@ TEST(RunnerTest, MotionBlurAveragesSubframesAcrossTheExposure) {
 
 TEST(RunnerTest, RollingShutterSkewsAMovingBall) {
   FakeLog log;
-  ScenarioRunner runner(
-      Scenario::parse(scenario("effects: {rolling_shutter: true, readout_ms: 16, "
-                               "rolling_shutter_bands: 16}\n"),
-                      "fake.yaml"),
-      fakeFactory(log));
+  ScenarioRunner runner(Scenario::parse(scenario("effects: {rolling_shutter: true, readout_ms: 16, "
+                                                 "rolling_shutter_bands: 16}\n"),
+                                        "fake.yaml"),
+                        fakeFactory(log));
   const RenderedFrame f = runner.render(0, 1, false);
   // Row y is read at (y + 0.5) ms - 8 ms: the ball moves 1 mm (1 px) per row.
   for (int y = 0; y < 16; ++y) {
@@ -193,15 +193,25 @@ TEST(RunnerTest, SceneIsRebuiltOnlyWhenTheCaseNeedsAnother) {
 
 TEST(RunnerTest, FlickerChangesTheLightOverFrames) {
   FakeLog log;
-  ScenarioRunner runner(
-      Scenario::parse(scenario("").replace(scenario("").find("{preset: normal}"), 16,
-                                           "{preset: flicker, flicker_frequency_hz: 2.5}"),
-                      "fake.yaml"),
-      fakeFactory(log));
+  std::string text = scenario("");
+  text.replace(text.find("{preset: normal}"), 16,
+               "{preset: normal, scale: 2, flicker_amplitude: 0.3, flicker_frequency_hz: 2.5}");
+  ScenarioRunner runner(Scenario::parse(text, "fake.yaml"), fakeFactory(log));
   runner.render(0, 0);
   runner.render(0, 1);  // a quarter period later: the peak
-  EXPECT_DOUBLE_EQ(log.lighting[0], 1.0);
-  EXPECT_NEAR(log.lighting[1], 1.3, 1e-12);
+  EXPECT_DOUBLE_EQ(log.lighting[0], 2.0);
+  EXPECT_NEAR(log.lighting[1], 2.6, 1e-12);
+
+  // The flicker preset follows the world's flicker of each frame.
+  FakeLog preset_log;
+  std::string preset = scenario("");
+  preset.replace(preset.find("{preset: normal}"), 16, "{preset: flicker, scale: 0.5}");
+  ScenarioRunner flicker(Scenario::parse(preset, "fake.yaml"), fakeFactory(preset_log));
+  for (int k = 0; k < 3; ++k) flicker.render(0, k);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_DOUBLE_EQ(preset_log.lighting[static_cast<std::size_t>(k)], 0.5 * flickerScale(3, k));
+  }
+  EXPECT_NE(preset_log.lighting[0], preset_log.lighting[1]);
 }
 
 TEST(RunnerTest, BadCaseOrFrameIsAnError) {

@@ -56,6 +56,26 @@ TEST(ScenarioTest, MinimalScenarioGetsItsValuesAndTheDefaults) {
   EXPECT_TRUE(s.cases[0].values.empty());
 }
 
+TEST(ScenarioTest, LightingPresetsAreSpelledAsTheWorldSpellsThem) {
+  for (LightingPreset p :
+       {LightingPreset::kNormal, LightingPreset::kDim, LightingPreset::kOverexposed,
+        LightingPreset::kDirectional, LightingPreset::kUneven, LightingPreset::kFlicker}) {
+    std::string text = kMinimal;
+    text.replace(text.find("preset: dim"), 11, "preset: " + lightingPresetName(p));
+    EXPECT_EQ(Scenario::parse(text, "x.yaml").cases[0].settings.lighting.preset, p);
+  }
+}
+
+TEST(ScenarioTest, NaoVersionPicksTheCameraFieldOfView) {
+  EXPECT_DOUBLE_EQ(Scenario::parse(kMinimal, "x").cases[0].settings.camera_horizontal_fov_deg,
+                   60.9);
+  const Scenario v6 = Scenario::parse(std::string(kMinimal) + "nao: v6\n", "x");
+  EXPECT_DOUBLE_EQ(v6.cases[0].settings.camera_horizontal_fov_deg, 56.3);
+  EXPECT_NE(
+      errorOf(std::string(kMinimal) + "nao: v7\n").find("bad.yaml:12: nao: 'v7' is not one of"),
+      std::string::npos);
+}
+
 TEST(ScenarioTest, BottomCameraDefaultsToItsResolution) {
   std::string text = kMinimal;
   text.replace(text.find("camera: top"), 11, "camera: bottom");
@@ -147,7 +167,8 @@ TEST(ScenarioTest, UnknownKeyNamesFileLineAndKey) {
   EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
 
   const std::string nested = errorOf(std::string(kMinimal) + "effects:\n  noise_sigmaa: 3\n");
-  EXPECT_NE(nested.find("bad.yaml:13: effects.noise_sigmaa: unknown key"), std::string::npos) << nested;
+  EXPECT_NE(nested.find("bad.yaml:13: effects.noise_sigmaa: unknown key"), std::string::npos)
+      << nested;
 }
 
 TEST(ScenarioTest, MissingRequiredKeyNamesFileLineAndKey) {
@@ -165,7 +186,8 @@ TEST(ScenarioTest, WrongTypeNamesFileLineAndKey) {
   std::string text = kMinimal;
   text.replace(text.find("frames: 3"), 9, "frames: many");
   const std::string msg = errorOf(text);
-  EXPECT_NE(msg.find("bad.yaml:3: frames: expected an integer, got 'many'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("bad.yaml:3: frames: expected an integer, got 'many'"), std::string::npos)
+      << msg;
   std::string list = kMinimal;
   list.replace(list.find("x_m: -1.0"), 9, "x_m: [1, 2]");
   EXPECT_NE(errorOf(list).find("bad.yaml:7: observer.x_m: expected a number"), std::string::npos)
@@ -178,9 +200,10 @@ TEST(ScenarioTest, ValueOutOfRangeNamesFileLineAndKey) {
   std::string text = kMinimal;
   text.replace(text.find("x_m: -1.0"), 9, "x_m: -9.0");
   const std::string msg = errorOf(text);
-  EXPECT_NE(msg.find("bad.yaml:7: observer.x_m: value -9.0 is out of range"), std::string::npos) << msg;
-  const std::string gray = errorOf(std::string(kMinimal) +
-                                   "robots:\n  - {x_m: 0, y_m: 0, heading_deg: 0, jersey_gray: 1.5}\n");
+  EXPECT_NE(msg.find("bad.yaml:7: observer.x_m: value -9.0 is out of range"), std::string::npos)
+      << msg;
+  const std::string gray = errorOf(
+      std::string(kMinimal) + "robots:\n  - {x_m: 0, y_m: 0, heading_deg: 0, jersey_gray: 1.5}\n");
   EXPECT_NE(gray.find("bad.yaml:13: robots[0].jersey_gray: value 1.5 is out of range"),
             std::string::npos)
       << gray;
@@ -190,9 +213,9 @@ TEST(ScenarioTest, ValueOutOfRangeNamesFileLineAndKey) {
       << preset;
   const std::string nan = errorOf(std::string(kMinimal) + "effects: {gain: .nan}\n");
   EXPECT_NE(nan.find("effects.gain"), std::string::npos) << nan;
-  const std::string head = errorOf(std::string(kMinimal).replace(
-      std::string(kMinimal).find("  heading_deg: 90\n"), 17,
-      "  heading_deg: 90\n  head: {pitch_deg: 40}\n"));
+  const std::string head =
+      errorOf(std::string(kMinimal).replace(std::string(kMinimal).find("  heading_deg: 90\n"), 17,
+                                            "  heading_deg: 90\n  head: {pitch_deg: 40}\n"));
   EXPECT_NE(head.find("observer.head.pitch_deg"), std::string::npos) << head;
 }
 
@@ -208,7 +231,8 @@ TEST(ScenarioTest, MissingFileIsAnError) {
     Scenario::load("/nonexistent/scenario.yaml");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/scenario.yaml: cannot open"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scenario.yaml: cannot open"),
+              std::string::npos);
   }
 }
 
@@ -216,8 +240,8 @@ TEST(ScenarioTest, TooManyRobotsAndBothPositionFormsAreErrors) {
   std::string text = std::string(kMinimal) + "robots:\n";
   for (int i = 0; i < 10; ++i) text += "  - {x_m: 0, y_m: 0, heading_deg: 0}\n";
   EXPECT_NE(errorOf(text).find("at most 9"), std::string::npos);
-  const std::string both = errorOf(std::string(kMinimal) +
-                                   "ball: {x_m: 0, y_m: 0, distance_m: 1}\n");
+  const std::string both =
+      errorOf(std::string(kMinimal) + "ball: {x_m: 0, y_m: 0, distance_m: 1}\n");
   EXPECT_NE(both.find("not both"), std::string::npos) << both;
 }
 
@@ -271,32 +295,33 @@ sweep:
 }
 
 TEST(ScenarioTest, BadSweepsNameTheLineAndPath) {
-  const std::string out_of_range =
-      errorOf(std::string(kMinimal) +
-              "sweep:\n  - path: lighting.scale\n    values: [1, 2]\n"
-              "  - path: effects.gain\n    values: [1, 100]\n");
+  const std::string out_of_range = errorOf(std::string(kMinimal) +
+                                           "sweep:\n  - path: lighting.scale\n    values: [1, 2]\n"
+                                           "  - path: effects.gain\n    values: [1, 100]\n");
   EXPECT_NE(out_of_range.find("effects.gain: value 100 is out of range"), std::string::npos)
       << out_of_range;
   EXPECT_NE(out_of_range.find(":16:"), std::string::npos) << out_of_range;
   EXPECT_NE(out_of_range.find("effects.gain = 100"), std::string::npos) << out_of_range;
 
-  const std::string no_robot = errorOf(std::string(kMinimal) +
-                                       "sweep:\n  - path: robots[3].heading_deg\n    values: [1]\n");
+  const std::string no_robot =
+      errorOf(std::string(kMinimal) + "sweep:\n  - path: robots[3].heading_deg\n    values: [1]\n");
   EXPECT_NE(no_robot.find("bad.yaml:13: sweep[0]: 'robots[3].heading_deg'"), std::string::npos)
       << no_robot;
-  const std::string unknown = errorOf(std::string(kMinimal) +
-                                      "sweep:\n  - path: lighting.brightness\n    values: [1]\n");
-  EXPECT_NE(unknown.find("lighting.brightness: unknown key"), std::string::npos) << unknown;
-  const std::string malformed = errorOf(std::string(kMinimal) +
-                                        "sweep:\n  - path: robots[x].heading_deg\n    values: [1]\n");
+  const std::string unknown =
+      errorOf(std::string(kMinimal) + "sweep:\n  - path: lighting.brightness\n    values: [1]\n");
+  EXPECT_NE(unknown.find("bad.yaml:14: lighting.brightness: unknown key"), std::string::npos)
+      << unknown;
+  const std::string malformed =
+      errorOf(std::string(kMinimal) + "sweep:\n  - path: robots[x].heading_deg\n    values: [1]\n");
   EXPECT_NE(malformed.find("bad.yaml:13: sweep[0].path: malformed setting path"), std::string::npos)
       << malformed;
-  const std::string empty = errorOf(std::string(kMinimal) +
-                                    "sweep:\n  - path: lighting.scale\n    values: []\n");
-  EXPECT_NE(empty.find("bad.yaml:14: sweep[0].values: expected a non-empty list"), std::string::npos)
+  const std::string empty =
+      errorOf(std::string(kMinimal) + "sweep:\n  - path: lighting.scale\n    values: []\n");
+  EXPECT_NE(empty.find("bad.yaml:14: sweep[0].values: expected a non-empty list"),
+            std::string::npos)
       << empty;
-  const std::string extra = errorOf(std::string(kMinimal) +
-                                    "sweep:\n  - path: lighting.scale\n    values: [1]\n    step: 2\n");
+  const std::string extra = errorOf(
+      std::string(kMinimal) + "sweep:\n  - path: lighting.scale\n    values: [1]\n    step: 2\n");
   EXPECT_NE(extra.find("bad.yaml:15: sweep[0].step: unknown key"), std::string::npos) << extra;
 }
 

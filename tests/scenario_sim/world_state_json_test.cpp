@@ -126,7 +126,8 @@ TEST(WorldStateJsonTest, BadJsonNamesTheKey) {
   EXPECT_EQ(errorOf(j), "truth.jsonl:3: 'ball.position_m' expected [x, y, z]");
   j = good;
   j["camera"]["camera_to_field"]["rotation"][0][0] = 5.0;
-  EXPECT_EQ(errorOf(j), "truth.jsonl:3: 'camera.camera_to_field.rotation' is not a rotation matrix");
+  EXPECT_EQ(errorOf(j),
+            "truth.jsonl:3: 'camera.camera_to_field.rotation' is not a rotation matrix");
   j = good;
   j["camera"]["model"]["focal_x_px"] = 0.0;
   EXPECT_NE(errorOf(j).find("truth.jsonl:3: 'camera.model':"), std::string::npos);

@@ -63,7 +63,8 @@ void Classifier::run(const float* inputs, int count, float* probabilities) const
     r.forward();
     const detail::Vec* out = r.output(last);
     for (int b = 0; b < m; ++b) {
-      for (int c = 0; c < k; ++c) probabilities[static_cast<std::size_t>(start + b) * k + c] = out[c][b];
+      for (int c = 0; c < k; ++c)
+        probabilities[static_cast<std::size_t>(start + b) * k + c] = out[c][b];
     }
   }
   for (; start < count; ++start) {
@@ -75,7 +76,8 @@ void Classifier::run(const float* inputs, int count, float* probabilities) const
 void Classifier::classify(const GrayView& image, const std::vector<PatchBox>& boxes,
                           std::vector<float>& probabilities) const {
   const Net& net = impl_->net;
-  if (net.input().channels != 1) throw Error("Classifier::classify: the net's input is not grayscale");
+  if (net.input().channels != 1)
+    throw Error("Classifier::classify: the net's input is not grayscale");
   const int n = net.input().size();
   const int k = net.classes();
   probabilities.resize(boxes.size() * k);

@@ -15,7 +15,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kManifestHeader = "file,label,scenario,frame,x_px,y_px,width_px,height_px,truth";
+constexpr const char* kManifestHeader =
+    "file,label,scenario,frame,x_px,y_px,width_px,height_px,truth";
 
 std::vector<std::string> splitCsv(const std::string& line) {
   std::vector<std::string> out;
@@ -58,7 +59,8 @@ std::map<std::string, ManifestRow> readManifest(const std::string& path) {
     const std::string where = path + ":" + std::to_string(line_no);
     const auto cols = splitCsv(line);
     if (cols.size() != 9) {
-      throw Error(where + ": expected 9 comma-separated columns, got " + std::to_string(cols.size()));
+      throw Error(where + ": expected 9 comma-separated columns, got " +
+                  std::to_string(cols.size()));
     }
     ManifestRow row;
     row.label = cols[1];
@@ -70,7 +72,8 @@ std::map<std::string, ManifestRow> readManifest(const std::string& path) {
     row.origin.width_px = cols[6].empty() ? 0.0f : parseNumber<float>(cols[6], where, "width_px");
     row.origin.height_px = cols[7].empty() ? 0.0f : parseNumber<float>(cols[7], where, "height_px");
     row.origin.truth = cols[8];
-    if (!rows.emplace(cols[0], row).second) throw Error(where + ": file " + cols[0] + " listed twice");
+    if (!rows.emplace(cols[0], row).second)
+      throw Error(where + ": file " + cols[0] + " listed twice");
   }
   return rows;
 }
@@ -98,17 +101,20 @@ Dataset readDataset(const std::string& dir, int width, int height,
     }
     std::sort(data.class_names.begin(), data.class_names.end());
   }
-  if (data.class_names.size() < 2) throw Error(dir + ": a dataset needs at least two class folders");
+  if (data.class_names.size() < 2)
+    throw Error(dir + ": a dataset needs at least two class folders");
   const std::string manifest_path = (fs::path(dir) / kManifestName).string();
   std::map<std::string, ManifestRow> manifest;
   if (fs::exists(manifest_path)) manifest = readManifest(manifest_path);
   std::size_t listed_found = 0;
   for (int label = 0; label < static_cast<int>(data.class_names.size()); ++label) {
     const fs::path class_dir = fs::path(dir) / data.class_names[label];
-    if (!fs::is_directory(class_dir)) throw Error(class_dir.string() + ": class folder does not exist");
+    if (!fs::is_directory(class_dir))
+      throw Error(class_dir.string() + ": class folder does not exist");
     std::vector<std::string> files;
     for (const auto& e : fs::directory_iterator(class_dir)) {
-      if (e.is_regular_file() && e.path().extension() == ".png") files.push_back(e.path().filename().string());
+      if (e.is_regular_file() && e.path().extension() == ".png")
+        files.push_back(e.path().filename().string());
     }
     std::sort(files.begin(), files.end());
     for (const std::string& name : files) {
@@ -163,8 +169,8 @@ void writeDataset(const Dataset& data, const std::string& dir) {
       throw Error(dir + ": sample with label " + std::to_string(s.label) + " has no class name");
     }
     if (s.patch.width() != data.width || s.patch.height() != data.height) {
-      throw Error(dir + ": sample " + s.origin.file + " is not " + std::to_string(data.width) + "x" +
-                  std::to_string(data.height));
+      throw Error(dir + ": sample " + s.origin.file + " is not " + std::to_string(data.width) +
+                  "x" + std::to_string(data.height));
     }
     const std::string& cls = data.class_names[s.label];
     std::string rel = s.origin.file;

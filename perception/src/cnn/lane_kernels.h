@@ -14,26 +14,43 @@
 
 namespace colorfree::cnn::detail {
 
+// One native vector register per Vec: 16 floats with AVX-512, 8 with AVX, 4 with SSE.
+#if defined(__AVX512F__)
 inline constexpr int kLanes = 16;
+#elif defined(__AVX__)
+inline constexpr int kLanes = 8;
+#else
+inline constexpr int kLanes = 4;
+#endif
 typedef float Vec __attribute__((vector_size(kLanes * sizeof(float))));
 
-#if defined(__AVX512F__)
-inline constexpr int kBlock = 8;  // output channels per register block (32 vector registers)
-#elif defined(__AVX__)
-inline constexpr int kBlock = 4;  // 16 ymm registers, a Vec takes two
-#else
-inline constexpr int kBlock = 2;  // 16 xmm registers, a Vec takes four
-#endif
+// Output channels per register block: 8 accumulators fit beside the operands in 16 registers.
+inline constexpr int kBlock = 8;
 
+// v − 0 is v for every float (v + 0 is not, for −0), so this folds into a plain broadcast.
 inline Vec splat(float v) {
   const Vec zero = {};
-  return zero + v;
+  return v - zero;
 }
 
 inline Vec activate(Vec v, Activation a) {
   if (a == Activation::kLeaky) return v > 0.0f ? v : v * kLeakySlope;
   return v;
 }
+
+// With AVX a multiply-add broadcasts a scalar weight from memory for free; SSE has no such
+// operand, so there the packed weights are stored already broadcast, one Vec per weight.
+#if defined(__AVX__)
+inline constexpr int kWeightWidth = 1;
+inline Vec weight(const float* p) { return splat(*p); }
+#else
+inline constexpr int kWeightWidth = kLanes;
+inline Vec weight(const float* p) {
+  Vec v;
+  std::memcpy(&v, p, sizeof(Vec));
+  return v;
+}
+#endif
 
 /// Weights reordered for the loops: convolution [o][ky][kx][c]; connected [o][y][x][c].
 void packWeights(const Layer& l, const float* params, float* packed);
@@ -56,23 +73,24 @@ inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, c
   for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
   for (int ky = ky0; ky < ky1; ++ky) {
     const Vec* row = in + (static_cast<std::size_t>(iy0 + ky) * Win + ix0) * C;
-    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB;
+    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
     for (int kx = kx0; kx < kx1; ++kx) {
       const Vec* px = row + kx * C;
-      const float* wk = wrow + kx * C * NB;
+      const float* wk = wrow + kx * C * NB * kWeightWidth;
       for (int c = 0; c < C; ++c) {
         const Vec v = px[c];
-        for (int j = 0; j < NB; ++j) acc[j] += wk[c * NB + j] * v;
+        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + (c * NB + j) * kWeightWidth) * v;
       }
     }
   }
 }
 
+// `out` may be a slice of a wider buffer (a route's concatenation): `O` channels per pixel.
 template <int NB>
 inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
-                      Vec* out) {
-  const int O = l.out.channels;
-  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels;
+                      Vec* out, int O) {
+  const float* wb =
+      w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   for (int oy = 0; oy < l.out.height; ++oy) {
     for (int ox = 0; ox < l.out.width; ++ox) {
       Vec acc[NB];
@@ -87,9 +105,9 @@ inline void convBlock(const Layer& l, const float* w, const float* bias, int o0,
 // activation is monotonic, so the maximum of the pre-activations is taken and activated once.
 template <int NB>
 inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, const float* bias,
-                          int o0, const Vec* in, Vec* out) {
-  const int O = l.out.channels;
-  const float* wb = w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels;
+                          int o0, const Vec* in, Vec* out, int O) {
+  const float* wb =
+      w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   const int off = -pool.pad / 2;
   for (int py = 0; py < pool.out.height; ++py) {
     const int cy0 = py * pool.stride + off;
@@ -113,15 +131,15 @@ inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, con
 }
 
 template <int NB>
-inline void connectedBlock(const Layer& l, const float* w, const float* bias, int o0,
-                           const Vec* in, Vec* out) {
+inline void connectedBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
+                           Vec* out) {
   const int n = l.in.size();
   Vec acc[NB];
   for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
-  const float* wb = w + static_cast<std::size_t>(o0) * n;
+  const float* wb = w + static_cast<std::size_t>(o0) * n * kWeightWidth;
   for (int i = 0; i < n; ++i) {
     const Vec v = in[i];
-    for (int j = 0; j < NB; ++j) acc[j] += wb[i * NB + j] * v;
+    for (int j = 0; j < NB; ++j) acc[j] += weight(wb + (i * NB + j) * kWeightWidth) * v;
   }
   for (int j = 0; j < NB; ++j) out[o0 + j] = activate(acc[j], l.activation);
 }
@@ -144,15 +162,16 @@ inline void forBlocks(int count, Args&&... args) {
 
 template <int NB>
 struct ConvRun {
-  static void run(int o, const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
-    convBlock<NB>(l, w, b, o, in, out);
+  static void run(int o, const Layer& l, const float* w, const float* b, const Vec* in, Vec* out,
+                  int out_stride) {
+    convBlock<NB>(l, w, b, o, in, out, out_stride);
   }
 };
 template <int NB>
 struct ConvPoolRun {
   static void run(int o, const Layer& l, const Layer& pool, const float* w, const float* b,
-                  const Vec* in, Vec* out) {
-    convPoolBlock<NB>(l, pool, w, b, o, in, out);
+                  const Vec* in, Vec* out, int out_stride) {
+    convPoolBlock<NB>(l, pool, w, b, o, in, out, out_stride);
   }
 };
 template <int NB>
@@ -162,13 +181,14 @@ struct ConnectedRun {
   }
 };
 
-inline void convForward(const Layer& l, const float* w, const float* b, const Vec* in, Vec* out) {
-  forBlocks<ConvRun>(l.out.channels, l, w, b, in, out);
+inline void convForward(const Layer& l, const float* w, const float* b, const Vec* in, Vec* out,
+                        int out_stride) {
+  forBlocks<ConvRun>(l.out.channels, l, w, b, in, out, out_stride);
 }
 
 inline void convPoolForward(const Layer& l, const Layer& pool, const float* w, const float* b,
-                            const Vec* in, Vec* out) {
-  forBlocks<ConvPoolRun>(l.out.channels, l, pool, w, b, in, out);
+                            const Vec* in, Vec* out, int out_stride) {
+  forBlocks<ConvPoolRun>(l.out.channels, l, pool, w, b, in, out, out_stride);
 }
 
 inline void connectedForward(const Layer& l, const float* w, const float* b, const Vec* in,
@@ -177,7 +197,7 @@ inline void connectedForward(const Layer& l, const float* w, const float* b, con
 }
 
 // Darknet's max pool: windows start at -padding/2; values outside the input are ignored.
-inline void maxPoolForward(const Layer& l, const Vec* in, Vec* out) {
+inline void maxPoolForward(const Layer& l, const Vec* in, Vec* out, int out_stride) {
   const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
   const int off = -l.pad / 2;
   for (int oy = 0; oy < l.out.height; ++oy) {
@@ -186,7 +206,7 @@ inline void maxPoolForward(const Layer& l, const Vec* in, Vec* out) {
     for (int ox = 0; ox < l.out.width; ++ox) {
       const int ix0 = ox * l.stride + off;
       const int x0 = std::max(0, ix0), x1 = std::min(Win, ix0 + l.size);
-      Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * C;
+      Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * out_stride;
       for (int c = 0; c < C; ++c) po[c] = splat(-std::numeric_limits<float>::infinity());
       for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {

@@ -1,5 +1,6 @@
 #include "colorfree/perception/cnn/net.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -8,7 +9,6 @@
 #include <map>
 #include <random>
 #include <set>
-#include <cerrno>
 #include <sstream>
 
 #include "colorfree/perception/error.h"
@@ -19,12 +19,15 @@ namespace {
 constexpr const char* kNormalizationComment = "# colorfree normalization=";
 
 std::string shapeText(const Shape& s) {
-  return std::to_string(s.width) + "x" + std::to_string(s.height) + "x" + std::to_string(s.channels);
+  return std::to_string(s.width) + "x" + std::to_string(s.height) + "x" +
+         std::to_string(s.channels);
 }
 
 // Darknet counts output sizes with integer division; a window that does not fit is an error here.
 int convOut(int in, int size, int stride, int pad) { return (in + 2 * pad - size) / stride + 1; }
-int poolOut(int in, int size, int stride, int padding) { return (in + padding - size) / stride + 1; }
+int poolOut(int in, int size, int stride, int padding) {
+  return (in + padding - size) / stride + 1;
+}
 
 }  // namespace
 
@@ -129,8 +132,8 @@ void Net::initialise(std::uint64_t seed) {
     const int biases = l.filters;
     const std::size_t weights = l.param_count - biases;
     const double fan_in = static_cast<double>(weights) / biases;
-    const double gain = l.activation == Activation::kLeaky ? 2.0 / (1.0 + kLeakySlope * kLeakySlope)
-                                                           : 1.0;
+    const double gain =
+        l.activation == Activation::kLeaky ? 2.0 / (1.0 + kLeakySlope * kLeakySlope) : 1.0;
     std::normal_distribution<double> normal(0.0, std::sqrt(gain / fan_in));
     float* p = params_.data() + l.param_offset;
     for (int b = 0; b < biases; ++b) p[b] = 0.0f;
@@ -245,8 +248,8 @@ Net parseDarknetCfg(const std::string& text, const std::string& origin) {
     }
     const auto eq = line.find('=');
     if (eq == std::string::npos || sections.empty()) {
-      throw Error(origin + ":" + std::to_string(line_no) + ": expected [section] or key=value, got '" +
-                  line + "'");
+      throw Error(origin + ":" + std::to_string(line_no) +
+                  ": expected [section] or key=value, got '" + line + "'");
     }
     sections.back().keys.emplace_back(trim(line.substr(0, eq)), trim(line.substr(eq + 1)));
     sections.back().key_lines.push_back(line_no);
@@ -320,8 +323,9 @@ Net parseDarknetCfg(const std::string& text, const std::string& origin) {
         throw Error(r.where(r.lineOf("groups")) + ": softmax groups are not supported");
       }
     } else {
-      throw Error(origin + ":" + std::to_string(s.line) + ": layer type [" + s.name +
-                  "] is not supported (convolutional, maxpool, avgpool, route, connected, softmax)");
+      throw Error(
+          origin + ":" + std::to_string(s.line) + ": layer type [" + s.name +
+          "] is not supported (convolutional, maxpool, avgpool, route, connected, softmax)");
     }
     r.finish();
     layers.push_back(std::move(l));
@@ -350,7 +354,8 @@ void readDarknetWeights(Net& net, const std::string& weights_path) {
   char seen[8];
   if (!in.read(seen, seen64 ? 8 : 4)) throw Error(weights_path + ": truncated weights header");
   std::vector<float>& p = net.params();
-  in.read(reinterpret_cast<char*>(p.data()), static_cast<std::streamsize>(p.size() * sizeof(float)));
+  in.read(reinterpret_cast<char*>(p.data()),
+          static_cast<std::streamsize>(p.size() * sizeof(float)));
   const std::size_t got = static_cast<std::size_t>(in.gcount()) / sizeof(float);
   if (got != p.size()) {
     throw Error(weights_path + ": truncated: the cfg needs " + std::to_string(p.size()) +

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "colorfree/perception/error.h"
 #include "lane_kernels.h"
 
 namespace colorfree::cnn::detail {
@@ -17,14 +18,29 @@ inline Vec loadu(const float* p) {
   return v;
 }
 
+typedef int IVec __attribute__((vector_size(kLanes * sizeof(int))));
+
+IVec stepMask(int first) {
+  IVec m;
+  for (int i = 0; i < kLanes; ++i) m[i] = first + 2 * i;
+  return m;
+}
+const IVec kEven = stepMask(0);
+const IVec kOdd = stepMask(1);
+const IVec kIota = stepMask(0) / 2;
+
 inline float activateScalar(float v, Activation a) {
   return a == Activation::kLeaky && v < 0.0f ? v * kLeakySlope : v;
 }
 
 // Sums of NB output channels over `vectors` × kLanes flattened positions; see the header.
+// Sums of NB output channels over `vectors` × kLanes flattened positions; see the header.
+// Without `mask`: raw sums into dst[j]. With it: activated, multiplied by the mask (0 on
+// positions that fall into margin columns, so the margins stay zero), into dst[j].
 template <int NB>
 void convPlanes(int C, int K, const int* offsets, const float* const* planes, const float* w,
-                const float* bias, int vectors, int scratch_stride, float* scratch) {
+                const float* bias, int vectors, float* const* dst, const float* mask,
+                Activation a) {
   for (int t = 0; t < vectors; ++t) {
     Vec acc[NB];
     for (int j = 0; j < NB; ++j) acc[j] = splat(bias[j]);
@@ -33,22 +49,26 @@ void convPlanes(int C, int K, const int* offsets, const float* const* planes, co
       const float* src = planes[c] + t * kLanes;
       for (int k = 0; k < K * K; ++k) {
         const Vec v = loadu(src + offsets[k]);
-        for (int j = 0; j < NB; ++j) acc[j] += wk[j] * v;
-        wk += NB;
+        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + j * kWeightWidth) * v;
+        wk += NB * kWeightWidth;
       }
     }
-    for (int j = 0; j < NB; ++j) {
-      std::memcpy(scratch + static_cast<std::size_t>(j) * scratch_stride + t * kLanes, &acc[j], sizeof(Vec));
+    if (mask != nullptr) {
+      const Vec m = loadu(mask + t * kLanes);
+      for (int j = 0; j < NB; ++j) acc[j] = activate(acc[j], a) * m;
     }
+    for (int j = 0; j < NB; ++j) std::memcpy(dst[j] + t * kLanes, &acc[j], sizeof(Vec));
   }
 }
 
 template <int NB>
 struct ConvPlanesRun {
   static void run(int o, int C, int K, const int* offsets, const float* const* planes,
-                  const float* w, const float* bias, int vectors, int scratch_stride, float* scratch) {
-    convPlanes<NB>(C, K, offsets, planes, w + static_cast<std::size_t>(o) * C * K * K, bias + o,
-                   vectors, scratch_stride, scratch + static_cast<std::size_t>(o) * scratch_stride);
+                  const float* w, const float* bias, int vectors, float* const* dst,
+                  const float* mask, Activation a) {
+    convPlanes<NB>(C, K, offsets, planes,
+                   w + static_cast<std::size_t>(o) * C * K * K * kWeightWidth, bias + o, vectors,
+                   dst + o, mask, a);
   }
 };
 
@@ -64,9 +84,22 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
       const float* r0 = src + static_cast<std::size_t>(y0) * stride;
       const float* r1 = r0 + stride;
       const int full = std::min(pool.out.width, w / 2);
-      for (int ox = 0; ox < full; ++ox) {
-        const float m = std::max(std::max(r0[2 * ox], r0[2 * ox + 1]), std::max(r1[2 * ox], r1[2 * ox + 1]));
-        out[ox] = activateScalar(m, a);
+      int ox = 0;
+      // kLanes outputs at a time: even and odd columns of two rows, by shuffles. Reads may run
+      // past the row (into the margin or the slack).
+      for (; ox < full; ox += kLanes) {
+        const Vec a0 = loadu(r0 + 2 * ox), a1 = loadu(r0 + 2 * ox + kLanes);
+        const Vec b0 = loadu(r1 + 2 * ox), b1 = loadu(r1 + 2 * ox + kLanes);
+        const Vec ra = __builtin_shuffle(a0, a1, kEven), rb = __builtin_shuffle(a0, a1, kOdd);
+        const Vec sa = __builtin_shuffle(b0, b1, kEven), sb = __builtin_shuffle(b0, b1, kOdd);
+        Vec m = ra > rb ? ra : rb;
+        const Vec n = sa > sb ? sa : sb;
+        m = activate(m > n ? m : n, a);
+        // Lanes past the row become 0 and land in the margin, the next row (written after
+        // this one) or the gap after the plane.
+        const Vec zero = {};
+        m = kIota < (full - ox) ? m : zero;
+        std::memcpy(out + ox, &m, sizeof(Vec));
       }
       for (int ox = full; ox < pool.out.width; ++ox) {
         float m = -std::numeric_limits<float>::infinity();
@@ -81,7 +114,8 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
       const int xa = std::max(0, x0), xb = std::min(w, x0 + K);
       float m = -std::numeric_limits<float>::infinity();
       for (int y = ya; y < yb; ++y) {
-        for (int x = xa; x < xb; ++x) m = std::max(m, src[static_cast<std::size_t>(y) * stride + x]);
+        for (int x = xa; x < xb; ++x)
+          m = std::max(m, src[static_cast<std::size_t>(y) * stride + x]);
       }
       out[ox] = activateScalar(m, a);
     }
@@ -92,6 +126,11 @@ void maxPoolPlane(const Layer& pool, const float* src, int stride, int h, int w,
 
 PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
   const auto& layers = net.layers();
+  for (const Layer& l : layers) {
+    if (l.type == LayerType::kConvolution && l.filters > kMaxChannels) {
+      throw Error("cnn: a convolution with more than " + std::to_string(kMaxChannels) + " filters");
+    }
+  }
   for (const Layer& l : layers) {
     if (l.type == LayerType::kConvolution) {
       margin_ = std::max(margin_, l.pad);
@@ -110,19 +149,34 @@ PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
       for (int j : l.inputs) {
         outputs_[i].stride = outputs_[j].stride;
         outputs_[i].rows = outputs_[j].rows;
-        outputs_[i].planes.insert(outputs_[i].planes.end(), outputs_[j].planes.begin(), outputs_[j].planes.end());
+        outputs_[i].planes.insert(outputs_[i].planes.end(), outputs_[j].planes.begin(),
+                                  outputs_[j].planes.end());
       }
     } else {
       outputs_[i] = makeTensor(l.out.height, l.out.width, l.out.channels);
     }
     if (l.type == LayerType::kConvolution) {
-      packed_[i].assign(l.param_count - l.filters, 0.0f);
+      packed_[i].assign((l.param_count - l.filters) * kWeightWidth, 0.0f);
       const int in_stride = l.in.width + 2 * margin_;
       const int vectors = (l.out.height * in_stride + kLanes - 1) / kLanes;
       scratch = std::max(scratch, static_cast<std::size_t>(vectors) * kLanes * l.filters);
     }
   }
-  scratch_.assign(scratch, 0.0f);
+  scratch_.assign(scratch + 4 * kLanes, 0.0f);  // slack for the pooling's vector reads
+  masks_.resize(layers.size());
+  for (std::size_t i = 0; i < layers.size(); ++i) {
+    const Layer& l = layers[i];
+    if (l.type != LayerType::kConvolution || l.stride != 1 || !(l.out.height == l.in.height) ||
+        !(l.out.width == l.in.width)) {
+      continue;
+    }
+    const int stride = l.in.width + 2 * margin_;
+    const int vectors = (l.out.height * stride + kLanes - 1) / kLanes;
+    masks_[i].assign(static_cast<std::size_t>(vectors) * kLanes, 0.0f);
+    for (int t = 0; t < vectors * kLanes; ++t) {
+      masks_[i][t] = (t % stride < l.out.width && t / stride < l.out.height) ? 1.0f : 0.0f;
+    }
+  }
   fused_.assign(layers.size(), false);
   std::vector<bool> routed(layers.size(), false);
   for (const Layer& l : layers) {
@@ -130,8 +184,8 @@ PlaneRunner::PlaneRunner(const Net& net) : net_(net) {
   }
   for (std::size_t i = 0; i + 1 < layers.size(); ++i) {
     fused_[i] = layers[i].type == LayerType::kConvolution && layers[i].stride == 1 &&
-                layers[i].size * layers[i].size <= kMaxTaps && layers[i + 1].type == LayerType::kMaxPool &&
-                !routed[i];
+                layers[i].size * layers[i].size <= kMaxTaps &&
+                layers[i + 1].type == LayerType::kMaxPool && !routed[i];
   }
   result_.assign(net.output().size(), 0.0f);
   repack();
@@ -143,7 +197,8 @@ PlaneRunner::Tensor PlaneRunner::makeTensor(int height, int width, int channels)
   t.width = width;
   t.stride = width + 2 * margin_;
   t.rows = height + 2 * margin_;
-  const std::size_t plane = static_cast<std::size_t>(t.rows) * t.stride;
+  // A gap after every plane takes the masked zeros a vector writes past a plane's end.
+  const std::size_t plane = static_cast<std::size_t>(t.rows) * t.stride + 2 * kLanes + margin_;
   // Slack after the last plane: a vector of flattened positions may read past the valid rows.
   const std::size_t slack = static_cast<std::size_t>(4 * margin_ + 8) * t.stride + 4 * kLanes;
   storage_.emplace_back(plane * channels + slack, 0.0f);
@@ -161,12 +216,14 @@ void PlaneRunner::repack() {
     const int C = l.in.channels, K = l.size, O = l.filters;
     for (int o0 = 0; o0 < O; o0 += kBlock) {
       const int nb = std::min(kBlock, O - o0);
-      float* block = packed_[i].data() + static_cast<std::size_t>(o0) * C * K * K;
+      float* block = packed_[i].data() + static_cast<std::size_t>(o0) * C * K * K * kWeightWidth;
       for (int j = 0; j < nb; ++j) {
         for (int c = 0; c < C; ++c) {
           for (int k = 0; k < K * K; ++k) {
-            block[(static_cast<std::size_t>(c) * K * K + k) * nb + j] =
-                w[(static_cast<std::size_t>(o0 + j) * C + c) * K * K + k];
+            float* dst =
+                block + ((static_cast<std::size_t>(c) * K * K + k) * nb + j) * kWeightWidth;
+            std::fill(dst, dst + kWeightWidth,
+                      w[(static_cast<std::size_t>(o0 + j) * C + c) * K * K + k]);
           }
         }
       }
@@ -190,7 +247,8 @@ void PlaneRunner::convScalar(int i, const Tensor& in, Tensor& out) {
             for (int kx = 0; kx < K; ++kx) {
               const int ix = ox * l.stride - l.pad + kx;
               if (ix < 0 || ix >= l.in.width) continue;
-              acc += w[((static_cast<std::size_t>(o) * C + c) * K + ky) * K + kx] * *valueAt(in, c, iy, ix);
+              acc += w[((static_cast<std::size_t>(o) * C + c) * K + ky) * K + kx] *
+                     *valueAt(in, c, iy, ix);
             }
           }
         }
@@ -213,15 +271,27 @@ void PlaneRunner::conv(int i, const Tensor& in, Tensor& out) {
   // Planes start at their corner (the margin included): position t = y * stride + x.
   const float* const* planes = in.planes.data();
   const float* bias = net_.params().data() + l.param_offset;
-  forBlocks<ConvPlanesRun>(l.filters, l.in.channels, K, offsets, planes, packed_[i].data(), bias,
-                           vectors, scratch_stride, scratch_.data());
+  float* dst[kMaxChannels];
+  if (fused_[i] || masks_[i].empty()) {
+    for (int o = 0; o < l.filters; ++o)
+      dst[o] = scratch_.data() + static_cast<std::size_t>(o) * scratch_stride;
+    forBlocks<ConvPlanesRun>(l.filters, l.in.channels, K, offsets, planes, packed_[i].data(), bias,
+                             vectors, dst, nullptr, l.activation);
+  } else {
+    // Same plane size in and out: position t of the input is position t of the output.
+    for (int o = 0; o < l.filters; ++o) dst[o] = valueAt(out, o, 0, 0);
+    forBlocks<ConvPlanesRun>(l.filters, l.in.channels, K, offsets, planes, packed_[i].data(), bias,
+                             vectors, dst, masks_[i].data(), l.activation);
+    return;
+  }
   if (fused_[i]) {
     // Straight from the sums into the max pool's output: activation after the maximum.
     const Layer& pool = net_.layers()[i + 1];
     Tensor& pooled = outputs_[i + 1];
     for (int o = 0; o < l.filters; ++o) {
       maxPoolPlane(pool, scratch_.data() + static_cast<std::size_t>(o) * scratch_stride, in.stride,
-                   l.out.height, l.out.width, l.activation, valueAt(pooled, o, 0, 0), pooled.stride);
+                   l.out.height, l.out.width, l.activation, valueAt(pooled, o, 0, 0),
+                   pooled.stride);
     }
     return;
   }
@@ -229,8 +299,8 @@ void PlaneRunner::conv(int i, const Tensor& in, Tensor& out) {
     const float* src = scratch_.data() + static_cast<std::size_t>(o) * scratch_stride;
     for (int y = 0; y < l.out.height; ++y) {
       const float* row = src + static_cast<std::size_t>(y) * in.stride;
-      float* dst = valueAt(out, o, y, 0);
-      for (int x = 0; x < l.out.width; ++x) dst[x] = activateScalar(row[x], l.activation);
+      float* d = valueAt(out, o, y, 0);
+      for (int x = 0; x < l.out.width; ++x) d[x] = activateScalar(row[x], l.activation);
     }
   }
 }
@@ -247,7 +317,8 @@ const float* PlaneRunner::run(const float* input) {
   const Shape& s = net_.input();
   for (int c = 0; c < s.channels; ++c) {
     for (int y = 0; y < s.height; ++y) {
-      std::memcpy(valueAt(input_, c, y, 0), input + (static_cast<std::size_t>(c) * s.height + y) * s.width,
+      std::memcpy(valueAt(input_, c, y, 0),
+                  input + (static_cast<std::size_t>(c) * s.height + y) * s.width,
                   sizeof(float) * s.width);
     }
   }

@@ -23,7 +23,7 @@ class PlaneRunner {
  private:
   struct Tensor {
     int height = 0, width = 0, stride = 0, rows = 0;  // stride = width + 2M, rows = height + 2M
-    std::vector<float*> planes;                        // one per channel, pointing at the margin corner
+    std::vector<float*> planes;  // one per channel, pointing at the margin corner
   };
   float* valueAt(const Tensor& t, int c, int y, int x) const {
     return t.planes[c] + static_cast<std::size_t>(y + margin_) * t.stride + x + margin_;
@@ -33,7 +33,8 @@ class PlaneRunner {
   void convScalar(int i, const Tensor& in, Tensor& out);
   void maxPool(int i, const Tensor& in, Tensor& out);
 
-  static constexpr int kMaxTaps = 121;  // kernels up to 11x11 take the vector path
+  static constexpr int kMaxTaps = 121;       // kernels up to 11x11 take the vector path
+  static constexpr int kMaxChannels = 1024;  // filters of one convolution
 
   const Net& net_;
   int margin_ = 0;
@@ -43,6 +44,8 @@ class PlaneRunner {
   std::vector<Tensor> outputs_;
   std::vector<std::vector<float>> packed_;  // convolution: [block][c][ky][kx][j]
   std::vector<float> scratch_;              // flattened convolution result before activation
+  std::vector<std::vector<float>>
+      masks_;  // same-size convolutions: 1 on real positions, 0 in margins
   std::vector<float> result_;
 };
 

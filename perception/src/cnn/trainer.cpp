@@ -17,7 +17,8 @@ using detail::Vec;
 
 namespace {
 
-// ---- backward kernels (batch in lanes, like the forward ones) ------------------------------------
+// ---- backward kernels (batch in lanes, like the forward ones)
+// ------------------------------------
 
 // Turns dL/d(output) into dL/d(pre-activation), in place.
 inline void activationBackward(Activation a, const Vec* out, Vec* grad, int n) {
@@ -218,7 +219,8 @@ class Backprop {
           convBackward(l, weights_[i].data(), in, out, dout, din, gw_[i].data(), gb_[i].data());
           break;
         case LayerType::kConnected:
-          connectedBackward(l, weights_[i].data(), in, out, dout, din, gw_[i].data(), gb_[i].data());
+          connectedBackward(l, weights_[i].data(), in, out, dout, din, gw_[i].data(),
+                            gb_[i].data());
           break;
         case LayerType::kMaxPool:
           if (din != nullptr) maxPoolBackward(l, in, out, dout, din);
@@ -316,7 +318,8 @@ inline std::uint64_t nextRandom(std::uint64_t& state) {
 inline float approxNormal(std::uint64_t& state) {
   const std::uint64_t r = nextRandom(state);
   float sum = 0.0f;
-  for (int k = 0; k < 4; ++k) sum += static_cast<float>((r >> (16 * k)) & 0xffff) * (1.0f / 65536.0f);
+  for (int k = 0; k < 4; ++k)
+    sum += static_cast<float>((r >> (16 * k)) & 0xffff) * (1.0f / 65536.0f);
   return (sum - 2.0f) * 1.7320508f;
 }
 
@@ -358,7 +361,8 @@ class Augmenter {
       for (int v = 0; v < h_; ++v) {
         for (int u = 0; u < w_; ++u) {
           const float* r = out + v * w_;
-          tmp_[v * w_ + u] = 0.25f * r[std::max(u - 1, 0)] + 0.5f * r[u] + 0.25f * r[std::min(u + 1, w_ - 1)];
+          tmp_[v * w_ + u] =
+              0.25f * r[std::max(u - 1, 0)] + 0.5f * r[u] + 0.25f * r[std::min(u + 1, w_ - 1)];
         }
       }
       for (int v = 0; v < h_; ++v) {
@@ -391,15 +395,17 @@ void patchToFloats(const GrayImage& patch, float* out) {
 }
 
 void checkData(const Net& net, const Dataset& data, const char* what) {
-  if (net.input().channels != 1) throw Error("trainer: the net's input must be grayscale (1 channel)");
+  if (net.input().channels != 1)
+    throw Error("trainer: the net's input must be grayscale (1 channel)");
   if (data.width != net.input().width || data.height != net.input().height) {
-    throw Error(std::string("trainer: ") + what + " patches are " + std::to_string(data.width) + "x" +
-                std::to_string(data.height) + ", the net needs " + std::to_string(net.input().width) +
-                "x" + std::to_string(net.input().height));
+    throw Error(std::string("trainer: ") + what + " patches are " + std::to_string(data.width) +
+                "x" + std::to_string(data.height) + ", the net needs " +
+                std::to_string(net.input().width) + "x" + std::to_string(net.input().height));
   }
   if (static_cast<int>(data.class_names.size()) != net.classes()) {
-    throw Error(std::string("trainer: ") + what + " has " + std::to_string(data.class_names.size()) +
-                " classes, the net " + std::to_string(net.classes()));
+    throw Error(std::string("trainer: ") + what + " has " +
+                std::to_string(data.class_names.size()) + " classes, the net " +
+                std::to_string(net.classes()));
   }
   for (const Sample& s : data.samples) {
     if (s.label < 0 || s.label >= net.classes()) {
@@ -407,12 +413,14 @@ void checkData(const Net& net, const Dataset& data, const char* what) {
                   std::to_string(s.label) + " out of range");
     }
     if (s.patch.width() != data.width || s.patch.height() != data.height) {
-      throw Error(std::string("trainer: ") + what + " sample " + s.origin.file + " has the wrong size");
+      throw Error(std::string("trainer: ") + what + " sample " + s.origin.file +
+                  " has the wrong size");
     }
   }
 }
 
-Evaluation evaluateSamples(Backprop& bp, const Net& net, const std::vector<const Sample*>& samples) {
+Evaluation evaluateSamples(Backprop& bp, const Net& net,
+                           const std::vector<const Sample*>& samples) {
   Evaluation e;
   const int K = net.classes(), n = net.input().size();
   e.confusion.assign(K, std::vector<int>(K, 0));
@@ -469,16 +477,19 @@ TrainResult trainImpl(Net net, const std::vector<const Sample*>& train_set,
   if (params.batch_size <= 0 || params.max_epochs <= 0 || params.patience_epochs <= 0 ||
       !(params.learning_rate > 0.0f) || params.momentum < 0.0f || params.momentum >= 1.0f ||
       params.adam_beta2 < 0.0f || params.adam_beta2 >= 1.0f || params.weight_decay < 0.0f) {
-    throw Error("trainer: batch size, epochs, patience and learning rate must be positive, "
-                "momentum and beta2 in [0, 1), weight decay not negative");
+    throw Error(
+        "trainer: batch size, epochs, patience and learning rate must be positive, "
+        "momentum and beta2 in [0, 1), weight decay not negative");
   }
   std::vector<int> counts(classes, 0);
   for (const Sample* s : train_set) ++counts[s->label];
   std::vector<float> class_weight(classes, 1.0f);
   for (int c = 0; c < classes; ++c) {
-    if (counts[c] == 0) throw Error("trainer: class " + std::to_string(c) + " has no training sample");
+    if (counts[c] == 0)
+      throw Error("trainer: class " + std::to_string(c) + " has no training sample");
     if (params.balance_classes) {
-      class_weight[c] = static_cast<float>(train_set.size()) / (static_cast<float>(classes) * counts[c]);
+      class_weight[c] =
+          static_cast<float>(train_set.size()) / (static_cast<float>(classes) * counts[c]);
     }
   }
   std::vector<bool> flip_allowed = params.augmentation.flip_allowed;
@@ -513,7 +524,8 @@ TrainResult trainImpl(Net net, const std::vector<const Sample*>& train_set,
     std::shuffle(order.begin(), order.end(), rng);
     double loss_sum = 0.0, weight_sum = 0.0;
     int correct = 0;
-    for (std::size_t batch_start = 0; batch_start < order.size(); batch_start += params.batch_size) {
+    for (std::size_t batch_start = 0; batch_start < order.size();
+         batch_start += params.batch_size) {
       const std::size_t batch_end = std::min(order.size(), batch_start + params.batch_size);
       float batch_weight = 0.0f;
       for (std::size_t chunk = batch_start; chunk < batch_end; chunk += kLanes) {
@@ -580,12 +592,14 @@ TrainResult trainImpl(Net net, const std::vector<const Sample*>& train_set,
     } else {
       ++since_best;
     }
-    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - epoch_start).count();
+    report.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - epoch_start).count();
     result.epochs.push_back(report);
     if (on_epoch) on_epoch(report);
     if (since_best >= params.patience_epochs) break;
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
   return result;
 }
 
@@ -610,7 +624,8 @@ TrainResult train(Net net, const Dataset& data, const TrainerParams& params,
     }
     std::shuffle(v.begin(), v.end(), rng);
     const std::size_t held = std::clamp<std::size_t>(
-        static_cast<std::size_t>(std::lround(params.validation_fraction * v.size())), 1, v.size() - 1);
+        static_cast<std::size_t>(std::lround(params.validation_fraction * v.size())), 1,
+        v.size() - 1);
     validation_set.insert(validation_set.end(), v.begin(), v.begin() + held);
     train_set.insert(train_set.end(), v.begin() + held, v.end());
   }
@@ -638,8 +653,8 @@ Evaluation evaluate(const Net& net, const Dataset& data) {
   return evaluateSamples(bp, net, samples);
 }
 
-double lossAndGradient(const Net& net, const float* inputs, const int* labels,
-                       const float* weights, int count, std::vector<float>& param_gradient,
+double lossAndGradient(const Net& net, const float* inputs, const int* labels, const float* weights,
+                       int count, std::vector<float>& param_gradient,
                        std::vector<float>* input_gradient) {
   Backprop bp(net);
   const int n = net.input().size();

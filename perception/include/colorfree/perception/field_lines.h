@@ -38,8 +38,10 @@ struct FieldLineParams {
   double merge_max_angle_deg = 8;
   double merge_max_offset_m = 0.08;
   double merge_max_gap_m = 1.0;  ///< free space between the ends of two collinear pieces
-  double min_line_length_m = 0.3;
+  double min_line_length_m = 0.25;
   int min_line_spots = 5;
+  /// Spots on a line's ground line up to this far beyond its ends join it.
+  double extend_max_gap_m = 0.15;
   /// Not on the ground: a line's spot widths must grow with the width expected where they are.
   /// Checked when the expected widths along it differ by at least `width_trend_min_range`; the
   /// slope of log(width) over log(expected width) must then be at least `min_width_trend`
@@ -62,7 +64,10 @@ struct FieldLineParams {
   double penalty_mark_clear_radius_m = 0.25;
   /// Farther away the scan lines are too sparse to tell a mark from a piece of line.
   double penalty_mark_max_distance_m = 3.5;
-  int min_penalty_mark_spots = 3;
+  /// Share of the pixels within the mark's size that may be darker than the carpet around it by
+  /// min_spot_contrast (a ball's black patches are; a painted cross has none).
+  double penalty_mark_max_dark_fraction = 0.08;
+  int min_penalty_mark_spots = 4;
 
   bool operator==(const FieldLineParams&) const = default;
   static FieldLineParams load(const std::string& path);

@@ -18,6 +18,7 @@ struct HighContrastParams {
   /// deviation, so windows below it are skipped before their histogram is built.
   double min_contrast = 22;
   /// A window counts as looked at when its centre pixel is outside the ignored regions.
+  int row_step_px = 2;        ///< a window's statistics and histogram use every this-th row
   int dilation_windows = 1;  ///< the marked set is dilated by this many windows in every direction
 
   bool operator==(const HighContrastParams&) const = default;
@@ -48,8 +49,8 @@ struct ContrastRegions {
   int markedCount() const;
 };
 
-/// Scans the image in windows, thresholds each window's histogram with Otsu's method and keeps the
-/// windows whose two classes are far enough apart (paper 2.2).
+/// Scans the image in windows, thresholds each window's histogram (32 bins of 8 gray levels) with
+/// Otsu's method and keeps the windows whose two classes are far enough apart (paper 2.2).
 class HighContrastDetector {
  public:
   explicit HighContrastDetector(HighContrastParams params = {});
@@ -68,5 +69,8 @@ struct OtsuResult {
   double mean0 = 0, mean1 = 0;
 };
 OtsuResult otsu(const std::uint32_t* histogram256);
+/// The same over `bins` bins, each with its count and the sum of its values; `threshold` is then
+/// the last bin of class 0. The detector uses 32 bins of 8 gray levels.
+OtsuResult otsuBinned(const std::uint32_t* count, const std::uint32_t* value_sum, int bins);
 
 }  // namespace colorfree

@@ -15,9 +15,9 @@ struct FieldBoundaryParams {
   int block_height_px = 8;    ///< height of a sampled column block
   int sample_step_px = 2;     ///< pixel step inside a block (both directions) for mean and spread
   /// A block is carpet when its mean is within this of the carpet luminance (gray levels) ...
-  double carpet_luminance_tolerance = 45;
+  double carpet_luminance_tolerance = 25;
   /// ... or within this fraction of it, whichever is larger (dim light, gradients).
-  double carpet_luminance_tolerance_ratio = 0.35;
+  double carpet_luminance_tolerance_ratio = 0.25;
   /// ... and its standard deviation is at most this factor times the carpet's typical one ...
   double carpet_spread_factor = 3.0;
   /// ... plus this (gray levels), so that a flat carpet still admits some noise.
@@ -72,7 +72,7 @@ struct BodyModelParams {
   double chest_back_x_m = -0.06;
   double chest_width_m = 0.20;
   double chest_bottom_m = 0.24;     ///< chest box from this height ...
-  double chest_top_m = 0.46;        ///< ... to this one (the neck)
+  double chest_top_m = 0.42;        ///< ... to this one (the neck)
   int margin_px = 4;                ///< grown by this many rows upwards in the image
 
   bool operator==(const BodyModelParams&) const = default;

@@ -1,9 +1,10 @@
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <mujoco/mujoco.h>
 #include <string>
 #include <vector>
 

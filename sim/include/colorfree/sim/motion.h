@@ -14,9 +14,9 @@ inline constexpr double kTurnStepMetresPerRad = 0.12;
 /// Where a robot is and how its legs move at one instant; a pure function of time.
 struct RobotMotionState {
   FieldPose pose;
-  double gait_phase = 0;        ///< [0, 1) of the gait cycle
-  double gait_speed_mps = 0;    ///< the leg swing's speed for walkPosture (0 = standing)
-  double speed_mps = 0;         ///< ground speed
+  double gait_phase = 0;          ///< [0, 1) of the gait cycle
+  double gait_speed_mps = 0;      ///< the leg swing's speed for walkPosture (0 = standing)
+  double speed_mps = 0;           ///< ground speed
   double walk_direction_rad = 0;  ///< field direction of travel
   double turn_rate_radps = 0;
 };

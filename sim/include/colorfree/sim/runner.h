@@ -39,6 +39,10 @@ double frameTime(const CaseSettings& settings, int frame_index);
 /// robots, ball (the camera and the object map come from the renderer).
 WorldState scenarioStateAt(const CaseSettings& settings, int frame_index);
 
+/// The light level of a frame at time `t_s`: scale and sinusoidal flicker, and for the flicker
+/// preset world.h's flickerScale of the frame.
+double lightingScaleAt(const CaseSettings& settings, int frame_index, double t_s);
+
 /// The ball's orientation at time 0 (seeded, so that the print differs between scenarios).
 Eigen::Quaterniond initialBallOrientation(std::uint64_t seed);
 
@@ -71,7 +75,8 @@ class ScenarioRunner {
 
  private:
   SceneRenderer& rendererFor(const CaseSettings& settings);
-  void setSceneAt(SceneRenderer& renderer, const CaseSettings& settings, double t_s) const;
+  void setSceneAt(SceneRenderer& renderer, const CaseSettings& settings, int frame_index,
+                  double t_s) const;
 
   Scenario scenario_;
   RendererFactory factory_;

@@ -14,10 +14,10 @@ namespace colorfree::sim {
 struct MotionSpec {
   enum class Kind { kStand, kWalk, kTurn };
   Kind kind = Kind::kStand;
-  double speed_mps = 0;           ///< walk: speed over the ground
-  double direction_rad = 0;       ///< walk: direction of travel relative to the heading
-  double turn_rate_radps = 0;     ///< turn: positive turns left
-  double phase = 0;               ///< gait phase at time 0, in [0, 1)
+  double speed_mps = 0;        ///< walk: speed over the ground
+  double direction_rad = 0;    ///< walk: direction of travel relative to the heading
+  double turn_rate_radps = 0;  ///< turn: positive turns left
+  double phase = 0;            ///< gait phase at time 0, in [0, 1)
 };
 std::string motionKindName(MotionSpec::Kind kind);
 
@@ -33,6 +33,7 @@ struct HeadSpec {
 
 struct ObserverSpec {
   FieldPose pose;
+  double jersey_gray = 0.5;
   HeadSpec head;
   MotionSpec motion;
 };
@@ -55,9 +56,9 @@ struct BallSpec {
 
 struct LightingSpec {
   LightingPreset preset = LightingPreset::kNormal;
-  double scale = 1.0;                ///< factor on every light of the preset
-  double flicker_amplitude = 0;      ///< relative: 0.2 = ±20 % over time
-  double flicker_frequency_hz = 0;
+  double scale = 1.0;               ///< factor on every light of the preset
+  double flicker_amplitude = 0;     ///< sinusoidal flicker, relative: 0.2 = ±20 % over time
+  double flicker_frequency_hz = 0;  ///< (the flicker preset adds world.h's flickerScale too)
 };
 
 /// Camera effects applied after rendering (camera_effects.h applies them).
@@ -97,11 +98,13 @@ struct CaseSettings {
   std::optional<BallSpec> ball;
   LightingSpec lighting;
   EffectsSpec effects;
+  double camera_horizontal_fov_deg = 60.9;  ///< NAO V4/V5 (V6: 56.3)
   bool shadows = true;
   int multisamples = 4;
   int frames = 1;
   double frame_rate_hz = 30;
   std::uint64_t seed = 1;
+  double ball_radius_m = 0.05;                ///< from the field dimensions file
   double orientation_tolerance_rad = 0.3927;  ///< scoring: 22.5° unless the scenario says
 };
 

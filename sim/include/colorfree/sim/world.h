@@ -32,7 +32,8 @@ struct SceneSpec {
   int max_width_px = 640;                ///< off-screen buffer size
   int max_height_px = 480;
   double observer_jersey_gray = 0.5;     ///< 0 black .. 1 white
-  double camera_horizontal_fov_deg = 60.9;  ///< NAO V4/V5; 56.3 for a V6
+  double camera_horizontal_fov_deg = 60.9;  ///< horizontal; NAO V4/V5 60.9, V6 56.3
+  int shadow_map_px = 2048;  ///< 4096 halves the shadow edges' steps, costs about 40 % more time
 };
 
 /// NAO joint angles in radians (NAO names and signs; right-side roll joints as on the robot)
@@ -72,7 +73,7 @@ struct LightingState {
 };
 
 /// A flickering hall light's intensity factor for a frame (mains-driven lamps beating with the
-/// camera's frame rate, plus seeded irregular dips), about 0.55..1.1; deterministic per seed.
+/// camera's frame rate, plus seeded irregular dips), about 0.4..1.05; deterministic per seed.
 double flickerScale(std::uint64_t seed, int frame_index);
 
 /// The MuJoCo world of one scene with its off-screen renderer. Builds the MJCF (field, goals,

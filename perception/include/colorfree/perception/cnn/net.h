@@ -53,7 +53,8 @@ class Net {
  public:
   Net() = default;
   /// Builds the layers' shapes and parameter slots; throws colorfree::Error naming `origin` when
-  /// the architecture is impossible (e.g. a route of mismatched planes, a kernel larger than its input).
+  /// the architecture is impossible (e.g. a route of mismatched planes, a kernel larger than its
+  /// input).
   Net(Shape input, std::vector<Layer> layers, const std::string& origin = "net");
 
   const Shape& input() const { return input_; }

@@ -15,7 +15,8 @@ struct PatchBox {
 /// How grey values (0..255) become the net's input.
 enum class PatchNormalization {
   kUnitRange,    ///< v / 255
-  kStandardize,  ///< (v − patch mean) / max(patch standard deviation, kMinStddev): lighting-invariant
+  kStandardize,  ///< (v − patch mean) / max(patch standard deviation, kMinStddev):
+                 ///< lighting-invariant
 };
 
 /// Floor of the standard deviation in kStandardize, in grey levels, so flat patches stay bounded.

@@ -12,12 +12,12 @@ namespace colorfree::cnn {
 
 /// Augmentation of grayscale patches, drawn afresh for every sample in every epoch.
 struct AugmentationParams {
-  float brightness = 0.1f;       ///< added offset, uniform in ±brightness × 255 grey levels
-  float contrast = 0.2f;         ///< gain around the patch mean, uniform in 1 ± contrast
-  float noise_stddev = 3.0f;     ///< Gaussian pixel noise, grey levels (σ uniform in [0, this])
-  float blur_probability = 0.2f; ///< chance of a [1 2 1]/4 blur in x and y
-  float shift_px = 1.0f;         ///< translation, uniform in ±shift_px (patch pixels)
-  float scale = 0.08f;           ///< zoom, uniform in 1 ± scale
+  float brightness = 0.1f;        ///< added offset, uniform in ±brightness × 255 grey levels
+  float contrast = 0.2f;          ///< gain around the patch mean, uniform in 1 ± contrast
+  float noise_stddev = 3.0f;      ///< Gaussian pixel noise, grey levels (σ uniform in [0, this])
+  float blur_probability = 0.2f;  ///< chance of a [1 2 1]/4 blur in x and y
+  float shift_px = 1.0f;          ///< translation, uniform in ±shift_px (patch pixels)
+  float scale = 0.08f;            ///< zoom, uniform in 1 ± scale
   /// Per class (label order): may a patch of this class be mirrored left-right and keep its
   /// label? Empty = every class may.
   std::vector<bool> flip_allowed;
@@ -28,8 +28,8 @@ enum class Optimizer { kSgd, kAdam };
 /// Training settings. The same settings, data and seed give the same weights, byte for byte.
 struct TrainerParams {
   Optimizer optimizer = Optimizer::kAdam;
-  float learning_rate = 0.01f;  ///< step size (Adam's α, or SGD's rate)
-  float momentum = 0.9f;        ///< SGD momentum; Adam's β1
+  float learning_rate = 0.005f;  ///< step size (Adam's α, or SGD's rate)
+  float momentum = 0.9f;         ///< SGD momentum; Adam's β1
   float adam_beta2 = 0.999f;
   float weight_decay = 1e-4f;  ///< L2 on weights (not biases), added to the gradient
   int batch_size = 64;         ///< samples per step (any size; run 16 at a time)
@@ -88,8 +88,8 @@ Evaluation evaluate(const Net& net, const Dataset& data);
 /// labels and weights, and its gradient with respect to every parameter (Net::params() order)
 /// and, if `input_gradient` is given, every input value. The net must end in [softmax].
 /// Exposed for the numerical gradient checks.
-double lossAndGradient(const Net& net, const float* inputs, const int* labels,
-                       const float* weights, int count, std::vector<float>& param_gradient,
+double lossAndGradient(const Net& net, const float* inputs, const int* labels, const float* weights,
+                       int count, std::vector<float>& param_gradient,
                        std::vector<float>* input_gradient = nullptr);
 
 }  // namespace colorfree::cnn

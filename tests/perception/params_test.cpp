@@ -1,0 +1,137 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "colorfree/perception/camera_model.h"
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/field_lines.h"
+#include "colorfree/perception/high_contrast.h"
+#include "colorfree/perception/ignore_regions.h"
+#include "colorfree/perception/param_file.h"
+#include "colorfree/perception/pipeline.h"
+#include "colorfree/perception/pose_fit.h"
+
+namespace colorfree {
+namespace {
+
+TEST(StageParams, ShippedFilesEqualTheCodeDefaults) {
+  EXPECT_EQ(FieldBoundaryParams::loadDefault(), FieldBoundaryParams{});
+  EXPECT_EQ(BodyModelParams::loadDefault(), BodyModelParams{});
+  EXPECT_EQ(HighContrastParams::loadDefault(), HighContrastParams{});
+  EXPECT_EQ(FieldLineParams::loadDefault(), FieldLineParams{});
+  EXPECT_EQ(PoseFitParams::loadDefault(), PoseFitParams{});
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string writeTemp(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / ("colorfree_params_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+// The file's text with the value of `key` replaced.
+std::string withValue(const std::string& text, const std::string& key, const std::string& value) {
+  std::istringstream lines(text);
+  std::string line, out;
+  bool found = false;
+  while (std::getline(lines, line)) {
+    if (line.rfind(key + ":", 0) == 0) {
+      line = key + ": " + value;
+      found = true;
+    }
+    out += line + "\n";
+  }
+  EXPECT_TRUE(found) << key;
+  return out;
+}
+
+// Every shipped stage file: an extra key, a missing key and a NaN are errors naming file and key.
+class StrictParamFile : public ::testing::TestWithParam<std::string> {};
+
+void loadByName(const std::string& name, const std::string& path) {
+  if (name == "field_boundary.yaml") FieldBoundaryParams::load(path);
+  else if (name == "body_model.yaml") BodyModelParams::load(path);
+  else if (name == "high_contrast.yaml") HighContrastParams::load(path);
+  else if (name == "field_lines.yaml") FieldLineParams::load(path);
+  else if (name == "pose_fit.yaml") PoseFitParams::load(path);
+  else FAIL() << name;
+}
+
+TEST_P(StrictParamFile, RejectsUnknownMissingAndNaN) {
+  const std::string name = GetParam();
+  const std::string text = readFile(defaultParamDir() + "/" + name);
+  ASSERT_FALSE(text.empty());
+  EXPECT_NO_THROW(loadByName(name, writeTemp(name, text)));
+
+  const std::string extra = writeTemp("extra_" + name, text + "surprise_key: 1\n");
+  try {
+    loadByName(name, extra);
+    ADD_FAILURE() << "unknown key accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("surprise_key"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(extra), std::string::npos) << e.what();
+  }
+
+  // Drop the first key line.
+  std::istringstream lines(text);
+  std::string line, kept, dropped_key;
+  while (std::getline(lines, line)) {
+    if (dropped_key.empty() && !line.empty() && line[0] != '#') {
+      dropped_key = line.substr(0, line.find(':'));
+      continue;
+    }
+    kept += line + "\n";
+  }
+  const std::string missing = writeTemp("missing_" + name, kept);
+  try {
+    loadByName(name, missing);
+    ADD_FAILURE() << "missing key accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(dropped_key), std::string::npos) << e.what();
+  }
+  const std::string nan = writeTemp("nan_" + name, kept + dropped_key + ": .nan\n");
+  EXPECT_THROW(loadByName(name, nan), Error);
+}
+
+INSTANTIATE_TEST_SUITE_P(Shipped, StrictParamFile,
+                         ::testing::Values("field_boundary.yaml", "body_model.yaml", "high_contrast.yaml",
+                                           "field_lines.yaml", "pose_fit.yaml"));
+
+TEST(StageParams, ImpossibleCombinationsAreErrors) {
+  const std::string lines = readFile(defaultParamDir() + "/field_lines.yaml");
+  EXPECT_THROW(FieldLineParams::load(writeTemp("widths.yaml", withValue(lines, "min_width_factor", "5.0"))), Error);
+  const std::string body = readFile(defaultParamDir() + "/body_model.yaml");
+  EXPECT_THROW(BodyModelParams::load(writeTemp("body.yaml", withValue(body, "chest_top_m", "0.10"))), Error);
+}
+
+TEST(CameraFile, DocumentedExampleLoadsAndSeesTheGroundAhead) {
+  const CameraModel cam = CameraModel::load(std::string(COLORFREE_SOURCE_DIR) + "/docs/camera_nao_top_example.yaml");
+  EXPECT_EQ(cam.width(), 640);
+  EXPECT_EQ(cam.height(), 480);
+  // The image centre looks at the ground 1 to 2 m ahead; the horizon is in the upper half.
+  const auto centre = cam.pixelToGround({320, 240});
+  ASSERT_TRUE(centre);
+  EXPECT_GT(centre->x(), 1.0);
+  EXPECT_LT(centre->x(), 2.0);
+  ASSERT_TRUE(cam.horizonY(320));
+  EXPECT_LT(*cam.horizonY(320), 240);
+}
+
+TEST(StageParams, PipelineConfigLoadsTheShippedDirectory) {
+  const PipelineConfig c = PipelineConfig::loadDefault();
+  EXPECT_EQ(c.field_lines, FieldLineParams{});
+  EXPECT_THROW(PipelineConfig::load("/nonexistent/colorfree"), Error);
+}
+
+}  // namespace
+}  // namespace colorfree
