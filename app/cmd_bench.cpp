@@ -120,11 +120,7 @@ json runItems(const BenchPlan& plan, std::vector<WorkItem> items, const std::str
       scorer.beginCase(caseInfo(runner->scenarioCase(item.case_index)));
       PerceptionRunner perception;
       runner->runCase(item.case_index, e.frames_per_case, true, [&](const sim::RenderedFrame& f) {
-        FieldPose guess = f.truth.observer;
-        guess.x_m += params.pose_guess_offset_m / std::sqrt(2.0);
-        guess.y_m += params.pose_guess_offset_m / std::sqrt(2.0);
-        guess.heading_rad += params.pose_guess_offset_deg / kRadToDeg;
-        scorer.addFrame(f.truth, perception.process(f.image, f.truth.camera.model, guess), &f.image);
+        scorer.addFrame(f.truth, perception.process(f, params), &f.image);
       });
       out.push_back({{"item", itemName(plan, item)},
                      {"experiment", e.id},

@@ -132,6 +132,36 @@ void printText(const std::string& path, const Frame& frame, const PipelineStats&
   std::printf("%s", stats.table().c_str());
 }
 
+nlohmann::json robotsJson(const Frame& frame) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& r : *frame.robot_percepts) {
+    nlohmann::json o = {{"box_px", {r.box.x0, r.box.y0, r.box.x1, r.box.y1}},
+                        {"feet_px", vec(r.feet_px)},
+                        {"confidence", r.confidence}};
+    if (r.position_in_robot) o["position_in_robot_m"] = vec(*r.position_in_robot);
+    if (r.orientation_raw) {
+      o["orientation_deg"] = r.orientation_raw->angle_rad * 180 / 3.14159265358979;
+      o["facing_known"] = r.orientation_raw->facing_known;
+    }
+    j.push_back(o);
+  }
+  return j;
+}
+
+void printRobots(const Frame& frame) {
+  std::printf("robot proposals: %zu, robots: %zu\n", frame.robot_proposals->size(), frame.robot_percepts->size());
+  for (const auto& r : *frame.robot_percepts) {
+    std::printf("  box (%.0f, %.0f)-(%.0f, %.0f) px  feet (%.1f, %.1f) px  confidence %.2f", r.box.x0, r.box.y0,
+                r.box.x1, r.box.y1, r.feet_px.x(), r.feet_px.y(), r.confidence);
+    if (r.position_in_robot) std::printf("  robot (%.2f, %.2f) m", r.position_in_robot->x(), r.position_in_robot->y());
+    if (r.orientation_raw) {
+      std::printf("  orientation %.0f deg%s", r.orientation_raw->angle_rad * 180 / 3.14159265358979,
+                  r.orientation_raw->facing_known ? "" : " (axis only)");
+    }
+    std::printf("\n");
+  }
+}
+
 cv::Point pt(const Eigen::Vector2d& v) {
   return {static_cast<int>(std::lround(v.x() - 0.5)), static_cast<int>(std::lround(v.y() - 0.5))};
 }
@@ -187,6 +217,23 @@ void drawAnnotated(const std::string& path, const Frame& frame) {
     }
     for (const auto& b : *frame.ball_percepts) {
       cv::circle(img, pt(b.centre_px), static_cast<int>(std::lround(b.radius_px)) + 2, {0, 0, 255}, 2);
+    }
+  }
+  if (frame.robot_proposals) {
+    for (const auto& p : *frame.robot_proposals) {
+      cv::rectangle(img, pt({p.box.x0, p.box.y0}), pt({p.box.x1, p.box.y1}), {255, 120, 0}, 1);
+    }
+  }
+  if (frame.robot_percepts) {
+    for (const auto& r : *frame.robot_percepts) {
+      cv::rectangle(img, pt({r.box.x0, r.box.y0}), pt({r.box.x1, r.box.y1}), {0, 0, 255}, 2);
+      cv::drawMarker(img, pt(r.feet_px), {0, 0, 255}, cv::MARKER_DIAMOND, 8, 2);
+      if (r.orientation_raw) {
+        const double a = r.orientation_raw->angle_rad;
+        cv::putText(img, std::to_string(static_cast<int>(std::lround(a * 180 / 3.14159265358979))) +
+                             (r.orientation_raw->facing_known ? "" : " axis"),
+                    pt({r.box.x0, r.box.y0 - 4}), cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 255}, 1);
+      }
     }
   }
   // Written to a temporary name first, so that a half-written file never looks complete.
@@ -248,9 +295,12 @@ void addDetectCommand(CLI::App& app, int& exit_code) {
     PipelineStats stats;
     pipeline.process(frame, &stats);
     if (opt->json) {
-      std::printf("%s\n", toJson(frame, stats).dump(2).c_str());
+      nlohmann::json j = toJson(frame, stats);
+      j["robots"] = robotsJson(frame);
+      std::printf("%s\n", j.dump(2).c_str());
     } else {
       printText(opt->image, frame, stats);
+      printRobots(frame);
     }
     if (!opt->out.empty()) drawAnnotated(opt->out, frame);
     exit_code = 0;

@@ -152,15 +152,12 @@ void addRunCommand(CLI::App& app, int& exit_code) {
         info.text_settings[v.path] = v.value;
       }
       scorer.beginCase(info);
+      perception.beginCase();
       const std::string frame_dir = args->out + "/frames/" + caseFolder(c);
       if (args->save_frames) fs::create_directories(frame_dir);
       runner.runCase(
           c, args->frames > 0 ? args->frames : -1, true, [&](const sim::RenderedFrame& f) {
-            FieldPose guess = f.truth.observer;
-            guess.x_m += params.pose_guess_offset_m / std::sqrt(2.0);
-            guess.y_m += params.pose_guess_offset_m / std::sqrt(2.0);
-            guess.heading_rad += params.pose_guess_offset_deg / kRadToDeg;
-            const FramePercepts percepts = perception.process(f.image, f.truth.camera.model, guess);
+            const FramePercepts percepts = perception.process(f, params);
             scorer.addFrame(f.truth, percepts, &f.image);
             if (args->save_frames)
               writeGrayPng(frame_dir + "/" + frameFile(f.frame_index), f.image.view());

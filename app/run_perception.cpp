@@ -1,5 +1,8 @@
 #include "run_perception.h"
 
+#include <cmath>
+#include <numbers>
+
 
 namespace colorfree::app {
 
@@ -51,11 +54,11 @@ PerceptionRunner::PerceptionRunner()
     : pipeline_(PipelineConfig::loadDefault()),
       pose_fitter_(PoseFitParams::loadDefault(), FieldDimensions::loadDefault()) {}
 
-FramePercepts PerceptionRunner::process(const GrayImage& image, const CameraModel& camera,
-                                        const FieldPose& pose_guess) {
-  Frame frame(image.view(), camera);
+FramePercepts PerceptionRunner::process(const sim::RenderedFrame& rendered, const ScoringParams& scoring) {
+  Frame frame(rendered.image.view(), rendered.truth.camera.model);
+  frame.time_s = rendered.truth.time_s;
   PipelineStats this_frame;
-  pipeline_.process(frame, &this_frame);
+  pipeline_.process(frame, &this_frame, &tracks_);
   FramePercepts p;
   for (int i = 0; i < kStageCount; ++i) {
     const Stage stage = static_cast<Stage>(i);
@@ -73,7 +76,11 @@ FramePercepts PerceptionRunner::process(const GrayImage& image, const CameraMode
   if (frame.field_lines) {
     p.field_features = frame.field_lines->features;
     p.pose_fit_stage = true;
-    const PoseFitResult fit = pose_fitter_.fit(frame.field_lines->features, pose_guess);
+    FieldPose guess = rendered.truth.observer;
+    guess.x_m += scoring.pose_guess_offset_m / std::sqrt(2.0);
+    guess.y_m += scoring.pose_guess_offset_m / std::sqrt(2.0);
+    guess.heading_rad += scoring.pose_guess_offset_deg * std::numbers::pi / 180.0;
+    const PoseFitResult fit = pose_fitter_.fit(frame.field_lines->features, guess);
     if (fit.ok) p.pose_in_field = fit.pose;
   }
   return p;

@@ -6,6 +6,7 @@
 #include "colorfree/perception/image.h"
 #include "colorfree/perception/pipeline.h"
 #include "colorfree/perception/pose_fit.h"
+#include "colorfree/sim/runner.h"
 
 namespace colorfree::app {
 
@@ -14,10 +15,12 @@ namespace colorfree::app {
 class PerceptionRunner {
  public:
   PerceptionRunner();
-  /// `pose_guess` starts the feature-based pose fit (the truth moved by the scoring offset, so a
-  /// fit that does not move shows that offset as its error).
-  FramePercepts process(const GrayImage& image, const CameraModel& camera,
-                        const FieldPose& pose_guess);
+  /// A new case: the robots' orientation tracks start empty.
+  void beginCase() { tracks_ = {}; }
+  /// Runs the pipeline on a rendered frame (the image, its camera model and its time; nothing
+  /// else of the truth reaches the perception except the pose fit's starting point: the true
+  /// pose moved by the scoring offset, so a fit that does not move shows that offset as its error).
+  FramePercepts process(const sim::RenderedFrame& rendered, const ScoringParams& scoring);
   /// Timing over all frames so far, as the pipeline keeps it.
   const PipelineStats& stats() const { return stats_; }
 
@@ -25,6 +28,7 @@ class PerceptionRunner {
   Pipeline pipeline_;
   PoseFitter pose_fitter_;
   PipelineStats stats_;
+  RobotTracks tracks_;
 };
 
 /// results.json's key for a pipeline stage (the paper's rows: high_contrast, field_features, ...).

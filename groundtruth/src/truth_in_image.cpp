@@ -1,5 +1,7 @@
 #include "colorfree/groundtruth/truth_in_image.h"
 
+#include "colorfree/perception/orientation/geometry.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -119,12 +121,7 @@ std::vector<Eigen::Vector2d> projectOutline(const FrameProjector& proj,
 
 }  // namespace
 
-double wrapAngle(double a) {
-  a = std::fmod(a, 2 * kPi);
-  if (a <= -kPi) a += 2 * kPi;
-  if (a > kPi) a -= 2 * kPi;
-  return a;
-}
+// wrapAngle and convexHull: the perception library's (orientation/geometry.cpp), same contract.
 
 RobotSide sideSeen(double heading_rel_rad) {
   const double a = std::abs(wrapAngle(heading_rel_rad));
@@ -204,29 +201,6 @@ std::vector<Eigen::Vector2d> clipPolygonToRect(const std::vector<Eigen::Vector2d
     }
   }
   return out;
-}
-
-std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> pts) {
-  std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
-  if (pts.size() < 3) return pts;
-  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-  };
-  std::vector<Eigen::Vector2d> hull(2 * pts.size());
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
-    hull[k++] = pts[i];
-  }
-  for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i - 1]) <= 0) --k;
-    hull[k++] = pts[i - 1];
-  }
-  hull.resize(k - 1);
-  return hull;
 }
 
 bool insideConvex(const std::vector<Eigen::Vector2d>& hull, const Eigen::Vector2d& p) {

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "colorfree/perception/cnn/net.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/param_file.h"
 
@@ -53,6 +54,9 @@ PipelineConfig PipelineConfig::load(const std::string& dir) {
   c.high_contrast = HighContrastParams::load(dir + "/high_contrast.yaml");
   c.field_lines = FieldLineParams::load(dir + "/field_lines.yaml");
   c.field = FieldDimensions::load(dir + "/field_dimensions.yaml");
+  c.robot_proposer = RobotProposerParams::load(dir + "/robot_proposer.yaml");
+  c.robot_detector = RobotDetectorParams::load(dir + "/robot_detector.yaml");
+  c.robot_orientation = RobotOrientationParams::load(dir + "/robot_orientation.yaml");
   c.ball_proposer = BallProposerParams::load(dir + "/ball_proposer.yaml");
   c.ball_detector = BallDetectorParams::load(dir + "/ball_detector.yaml");
   return c;
@@ -66,7 +70,17 @@ Pipeline::Pipeline(PipelineConfig config)
       body_contour_(config.body_model),
       high_contrast_(config.high_contrast),
       field_lines_(config.field_lines, config.field),
+      robot_proposer_(config.robot_proposer, config.field),
       ball_proposer_(config.ball_proposer) {
+  if (config_.robot_stages) {
+    const std::string dir = config_.model_dir.empty() ? cnn::defaultModelDir() : config_.model_dir;
+    auto net = [&](const char* stem) {
+      return cnn::Classifier::load(dir + "/" + stem + ".cfg", dir + "/" + stem + ".weights");
+    };
+    robot_detector_.emplace(config_.robot_detector, net("robot_net"));
+    robot_orientation_.emplace(config_.robot_orientation, config_.field, net("ori_boost_net"),
+                               net("ori_net"));
+  }
   if (config_.ball_stages) ball_detector_ = BallDetector::load(config_.ball_detector, config_.model_dir);
 }
 
@@ -83,7 +97,7 @@ void timed(PipelineStats* stats, Stage stage, F&& f) {
 
 }  // namespace
 
-void Pipeline::process(Frame& frame, PipelineStats* stats) const {
+void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) const {
   const GrayView& image = frame.image;
   if (image.empty()) throw Error("pipeline: empty image");
   if (image.width != frame.camera.width() || image.height != frame.camera.height()) {
@@ -111,8 +125,20 @@ void Pipeline::process(Frame& frame, PipelineStats* stats) const {
   timed(stats, Stage::kFieldLines, [&] {
     frame.field_lines = field_lines_.run(image, frame.camera, *frame.ignore_mask, config_.keep_rejected);
   });
-  // Robot stages (robot proposals, detector, orientation) come here when they exist; the ball
-  // proposals then also scan the regions in front of the detected robots' feet.
+  if (robot_detector_) {
+    timed(stats, Stage::kRobotProposals, [&] {
+      frame.robot_proposals =
+          robot_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions).proposals;
+    });
+    timed(stats, Stage::kRobotDetector,
+          [&] { frame.robot_percepts = robot_detector_->run(image, frame.camera, *frame.robot_proposals); });
+    timed(stats, Stage::kRobotOrientation, [&] {
+      RobotTracks this_frame_only;
+      robot_orientation_->run(image, frame.camera, *frame.robot_percepts, tracks ? *tracks : this_frame_only,
+                              frame.time_s);
+    });
+  }
+  // The ball proposals also scan the regions in front of the detected robots' feet.
   if (ball_detector_) {
     timed(stats, Stage::kBallProposals, [&] {
       frame.ball_proposals = ball_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions,

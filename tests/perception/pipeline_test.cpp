@@ -8,7 +8,7 @@
 namespace colorfree {
 namespace {
 
-TEST(Pipeline, FillsItsStagesAndLeavesTheOthersEmpty) {
+TEST(Pipeline, FillsEveryStageInOrder) {
   const CameraModel cam = test::testCamera(22);
   const GrayImage image = test::renderScene(cam, test::sceneFromField(FieldDimensions{}, {-2.0, 0, 0}));
   const Pipeline pipeline(PipelineConfig::loadDefault());
@@ -19,19 +19,35 @@ TEST(Pipeline, FillsItsStagesAndLeavesTheOthersEmpty) {
   ASSERT_TRUE(frame.contrast_regions && frame.field_lines);
   EXPECT_FALSE(frame.field_lines->features.lines.empty());
   EXPECT_GT(frame.contrast_regions->markedCount(), 0);
-  EXPECT_FALSE(frame.robot_proposals || frame.robot_percepts);
-  EXPECT_TRUE(frame.ball_proposals && frame.ball_percepts);  // the ball stages (issue 6)
-  for (Stage s : {Stage::kIgnoreRegions, Stage::kHighContrast, Stage::kFieldLines, Stage::kBallProposals,
-                  Stage::kBallDetector}) {
+  EXPECT_TRUE(frame.robot_proposals && frame.robot_percepts);  // the robot stages (issue 7)
+  EXPECT_TRUE(frame.ball_proposals && frame.ball_percepts);    // the ball stages (issue 6)
+  for (int i = 0; i < kStageCount; ++i) {
+    const Stage s = static_cast<Stage>(i);
     ASSERT_TRUE(stats.timing(s)) << stageName(s);
     EXPECT_EQ(stats.timing(s)->frames, 1);
     EXPECT_GE(stats.timing(s)->max_ms, stats.timing(s)->meanMs());
   }
-  for (Stage s : {Stage::kRobotProposals, Stage::kRobotDetector, Stage::kRobotOrientation}) {
-    EXPECT_FALSE(stats.timing(s)) << stageName(s);
-  }
   pipeline.process(frame, &stats);
   EXPECT_EQ(stats.timing(Stage::kFieldLines)->frames, 2);
+  EXPECT_EQ(stats.table().find("absent"), std::string::npos);
+}
+
+TEST(Pipeline, StagesSwitchedOffAreAbsentNotZero) {
+  const CameraModel cam = test::testCamera(22);
+  const GrayImage image = test::renderScene(cam, test::sceneFromField(FieldDimensions{}, {-2.0, 0, 0}));
+  PipelineConfig config = PipelineConfig::loadDefault();
+  config.robot_stages = false;
+  config.ball_stages = false;
+  const Pipeline pipeline(config);
+  Frame frame(image.view(), cam);
+  PipelineStats stats;
+  pipeline.process(frame, &stats);
+  EXPECT_TRUE(frame.field_lines);
+  EXPECT_FALSE(frame.robot_proposals || frame.robot_percepts || frame.ball_proposals || frame.ball_percepts);
+  for (Stage s : {Stage::kRobotProposals, Stage::kRobotDetector, Stage::kRobotOrientation,
+                  Stage::kBallProposals, Stage::kBallDetector}) {
+    EXPECT_FALSE(stats.timing(s)) << stageName(s);
+  }
   const std::string table = stats.table();
   EXPECT_NE(table.find("ball detector"), std::string::npos);
   EXPECT_NE(table.find("absent"), std::string::npos);

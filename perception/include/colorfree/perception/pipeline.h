@@ -13,6 +13,9 @@
 #include "colorfree/perception/ignore_regions.h"
 #include "colorfree/perception/image.h"
 #include "colorfree/perception/percepts.h"
+#include "colorfree/perception/robot_detector.h"
+#include "colorfree/perception/robot_orientation.h"
+#include "colorfree/perception/robot_proposer.h"
 
 namespace colorfree {
 
@@ -21,13 +24,13 @@ namespace colorfree {
 struct Frame {
   GrayView image;
   CameraModel camera;
+  double time_s = 0;  ///< the frame's time (the orientation filter's buffer expires by it)
 
   std::optional<FieldBoundary> field_boundary;
   std::optional<BodyContour> body_contour;
   std::optional<IgnoreMask> ignore_mask;
   std::optional<ContrastRegions> contrast_regions;
   std::optional<FieldLineResult> field_lines;
-  // Filled by later stages (robot and ball modules).
   std::optional<std::vector<RobotProposal>> robot_proposals;
   std::optional<std::vector<RobotPercept>> robot_percepts;
   std::optional<std::vector<BallProposal>> ball_proposals;
@@ -83,9 +86,13 @@ struct PipelineConfig {
   HighContrastParams high_contrast;
   FieldLineParams field_lines;
   FieldDimensions field;
+  RobotProposerParams robot_proposer;
+  RobotDetectorParams robot_detector;
+  RobotOrientationParams robot_orientation;
   BallProposerParams ball_proposer;
   BallDetectorParams ball_detector;
-  bool ball_stages = true;  ///< run ball proposals and the ball detector (needs the ball nets)
+  bool robot_stages = true;  ///< run robot proposals, RobotNet and the orientation (needs the nets)
+  bool ball_stages = true;   ///< run ball proposals and the ball detector (needs the ball nets)
   std::string model_dir;    ///< the nets' directory; empty = the shipped perception/models
   bool use_body_contour = true;  ///< the observer's body (bottom camera)
   bool keep_rejected = false;    ///< keep rejected candidates with their reason
@@ -100,8 +107,10 @@ struct PipelineConfig {
 class Pipeline {
  public:
   explicit Pipeline(PipelineConfig config);
-  /// Throws colorfree::Error when the image does not match the camera model.
-  void process(Frame& frame, PipelineStats* stats = nullptr) const;
+  /// Throws colorfree::Error when the image does not match the camera model. `tracks` is the
+  /// caller's state between frames (the robots' orientation filters); without it every frame's
+  /// filtered orientation comes from that frame alone.
+  void process(Frame& frame, PipelineStats* stats = nullptr, RobotTracks* tracks = nullptr) const;
 
  private:
   PipelineConfig config_;
@@ -109,6 +118,9 @@ class Pipeline {
   BodyContourProvider body_contour_;
   HighContrastDetector high_contrast_;
   FieldLineDetector field_lines_;
+  RobotProposer robot_proposer_;
+  std::optional<RobotDetector> robot_detector_;
+  std::optional<RobotOrientationEstimator> robot_orientation_;
   BallProposer ball_proposer_;
   std::optional<BallDetector> ball_detector_;
 };

@@ -1,0 +1,118 @@
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "colorfree/perception/camera_model.h"
+#include "colorfree/perception/cnn/classifier.h"
+#include "colorfree/perception/field_dimensions.h"
+#include "colorfree/perception/image.h"
+#include "colorfree/perception/orientation/geometry.h"
+#include "colorfree/perception/orientation/orientation_filter.h"
+#include "colorfree/perception/percepts.h"
+
+namespace colorfree {
+
+/// Contrast-normalized Sobel of a region: each pixel's Sobel gradient divided by
+/// sqrt(64 · local variance + σ²) over a (2·radius+1)² window, so a clean step edge answers about
+/// 1 whatever its contrast and the lighting. Row-major, region size; gx right, gy down.
+struct CnsImage {
+  int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the region in image pixels
+  std::vector<float> gx, gy;
+  float gyAt(int x, int y) const { return gy[(y - y0) * width + (x - x0)]; }
+};
+CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int width, int height,
+                                 int variance_radius_px, double sigma_gray);
+
+/// Parameters of the orientation stage (perception/params/robot_orientation.yaml).
+struct RobotOrientationParams {
+  double feet_region_above_fraction = 0.22;  ///< feet region: from this fraction of the box height above the feet ...
+  double feet_region_below_fraction = 0.08;  ///< ... to this fraction below them
+  int scan_step_px = 1;                      ///< between vertical scan lines
+  int median_width_px = 3;                   ///< horizontal median filter over the CNS response
+  int variance_radius_px = 2;                ///< CNS local variance window radius
+  double cns_sigma_gray = 20;                ///< CNS noise floor
+  double cns_threshold = 0.5;                ///< minus the vertical CNS (bright above dark) above this is the silhouette
+  double vote_distance_m = 0.012;            ///< line voting
+  double second_line_min_length_m = 0.04;
+  double second_line_max_length_m = 0.25;
+  double second_line_max_cos = 0.35;
+  double min_line_votes = 6;                 ///< a line with fewer votes is not classified
+  double region_margin_fraction = 0.25;      ///< region: line width grown by this at both ends
+  double region_above_fraction = 0.35;       ///< region height above the line, in robot heights
+  double region_below_fraction = 0.06;       ///< below the line, in robot heights
+  double min_usable_confidence = 0.5;        ///< OriBoostNet's usable probability needed
+  double min_side_confidence = 0.5;          ///< OriNet's best class probability needed
+  double track_max_distance_m = 0.5;         ///< association of a percept with a track
+  double track_expiry_s = 1.0;               ///< a track and its estimate expire after this without samples
+  int filter_buffer_size = 11;
+
+  bool operator==(const RobotOrientationParams&) const = default;
+  static RobotOrientationParams load(const std::string& path);
+  static RobotOrientationParams loadDefault();
+};
+
+/// A classified region around one silhouette line (for training and drawing).
+struct LineRegion {
+  LineHypothesis line_in_robot;  ///< metres, observer's robot frame
+  PixelBox box;
+  float usable = 0;              ///< OriBoostNet's usable probability (0 when not run)
+  std::optional<RobotSide> side; ///< OriNet's class when the region was usable
+  float side_confidence = 0;
+};
+
+/// The lines generator's output for one robot.
+struct RobotLines {
+  std::vector<Eigen::Vector2d> silhouette_px;
+  std::vector<Eigen::Vector2d> silhouette_in_robot;
+  std::vector<LineRegion> regions;  ///< one per line found (first, then second)
+  std::optional<RobotOrientation> orientation;  ///< after the consistency check
+};
+
+/// Tracked robots with their orientation filters: explicit state, passed in and returned by the
+/// caller (the stage keeps none).
+struct RobotTracks {
+  struct Track {
+    int id = 0;
+    Eigen::Vector2d position_in_robot = Eigen::Vector2d::Zero();
+    double last_seen_s = 0;
+    OrientationTrack orientation;
+  };
+  std::vector<Track> tracks;
+  int next_id = 0;
+};
+
+/// The paper's orientation pipeline (2.4) on detected robots.
+class RobotOrientationEstimator {
+ public:
+  RobotOrientationEstimator(RobotOrientationParams params, FieldDimensions field,
+                            cnn::Classifier ori_boost_net, cnn::Classifier ori_net);
+  static RobotOrientationEstimator loadDefault();
+
+  /// Lines generator and line regions (no classification).
+  RobotLines findLines(const GrayView& image, const CameraModel& camera,
+                       const RobotPercept& robot) const;
+  /// Lines, OriBoostNet, OriNet, consistency check and orientation of one robot.
+  RobotLines estimate(const GrayView& image, const CameraModel& camera,
+                      const RobotPercept& robot) const;
+  /// Fills orientation_raw, track_id and orientation_filtered of every percept; updates `tracks`
+  /// (association by ground position, expiry). `time_s` is the frame's time.
+  void run(const GrayView& image, const CameraModel& camera, std::vector<RobotPercept>& robots,
+           RobotTracks& tracks, double time_s) const;
+  const RobotOrientationParams& params() const { return params_; }
+
+ private:
+  RobotOrientationParams params_;
+  double robot_height_m_;
+  cnn::Classifier boost_;
+  cnn::Classifier ori_;
+};
+
+/// Associates percepts with tracks (nearest first, within max_distance_m), starts new tracks,
+/// drops tracks unseen for longer than expiry_s, and feeds each percept's raw orientation to its
+/// track's filter. Fills track_id and orientation_filtered.
+void updateRobotTracks(RobotTracks& tracks, std::vector<RobotPercept>& robots, double time_s,
+                       double max_distance_m, const OrientationFilterParams& filter);
+
+}  // namespace colorfree

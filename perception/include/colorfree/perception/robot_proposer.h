@@ -1,0 +1,90 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "colorfree/perception/camera_model.h"
+#include "colorfree/perception/field_dimensions.h"
+#include "colorfree/perception/high_contrast.h"
+#include "colorfree/perception/ignore_regions.h"
+#include "colorfree/perception/image.h"
+#include "colorfree/perception/percepts.h"
+
+namespace colorfree {
+
+/// Parameters of the robot proposal stage (perception/params/robot_proposer.yaml).
+struct RobotProposerParams {
+  int column_step_px = 4;  ///< distance between two scan lines inside a high-contrast column
+  /// A pixel leaves the carpet when it is brighter than the running carpet luminance by more than
+  /// max(min_jump_gray, jump_ratio × carpet luminance) (gray levels).
+  double min_jump_gray = 16;
+  double jump_ratio = 0.18;
+  /// Carpet pixels are averaged into the running carpet luminance with this weight.
+  double carpet_update_weight = 0.25;
+  int max_gap_px = 3;  ///< carpet-like pixels tolerated inside a robot run (a joint, a seam)
+  /// A run is a robot's lower body when it reaches at least this fraction of the expected pixel height
+  /// of a robot whose feet are at its lower end (lines, the ball and shadows are shorter).
+  double min_run_height_fraction = 0.4;
+  /// ... and at least this fraction of the pixels up to that height must be brighter than the carpet.
+  double min_fill_fraction = 0.6;
+  double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
+  /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
+  /// of the expected height (plus 2 px).
+  double join_height_fraction = 0.12;
+  /// ... and when the columns between them are at most this fraction of the expected robot width
+  /// (the gap between two legs).
+  double join_gap_width_fraction = 0.45;
+  /// A group narrower than this fraction of the expected robot width is dropped (a goal post's
+  /// width is about 0.3 of it, so RobotNet still sees posts).
+  double min_width_fraction = 0.2;
+  /// A group wider than this many expected widths is split into robots side by side.
+  double split_width_factor = 1.7;
+  double box_width_factor = 1.25;   ///< proposed box width in expected robot widths
+  double box_height_factor = 1.08;  ///< proposed box height in expected robot heights
+  double box_below_feet_fraction = 0.04;  ///< box bottom below the feet, in expected heights
+  double max_overlap_iou = 0.45;  ///< of two proposals overlapping more, the one lower in the image stays
+  int max_proposals = 12;
+
+  bool operator==(const RobotProposerParams&) const = default;
+  static RobotProposerParams load(const std::string& path);
+  static RobotProposerParams loadDefault();
+};
+
+/// Why a scan-line run or a group did not become a proposal (only filled when asked for).
+enum class RobotRejectReason { kRunTooShort, kTooNarrow, kTooFar, kAboveHorizon, kOverlap, kTooMany };
+const char* robotRejectReasonName(RobotRejectReason reason);
+
+struct RejectedRobotCandidate {
+  Eigen::Vector2d feet_px = Eigen::Vector2d::Zero();
+  RobotRejectReason reason = RobotRejectReason::kRunTooShort;
+};
+
+struct RobotProposals {
+  std::vector<RobotProposal> proposals;
+  /// Feet points (lower ends of long enough runs) found by the scan lines, for drawing.
+  std::vector<Eigen::Vector2d> feet_points_px;
+  std::vector<RejectedRobotCandidate> rejected;  ///< only with keep_rejected
+};
+
+/// Colour-free robot proposals (paper 2.3): vertical scan lines over the image columns with
+/// high-contrast windows, walking up from the bottom of the looked-at region, follow the carpet's
+/// luminance and find where a run of non-carpet pixels starts (a robot's feet). A run must be tall
+/// enough for a robot whose feet are there (camera model); neighbouring feet points join into
+/// groups whose width must suit a robot; each group (split when several robots stand side by
+/// side) gives a box of the expected robot size above its feet. A robot cut by the lower image
+/// border is proposed with its feet on the border (its box is then too small: out of scope for the
+/// feet point). Fallen robots are out of scope (their runs are short; they are not proposed).
+class RobotProposer {
+ public:
+  explicit RobotProposer(RobotProposerParams params = {}, FieldDimensions field = {});
+  RobotProposals run(const GrayView& image, const CameraModel& camera, const IgnoreMask& ignore,
+                     const ContrastRegions& regions, bool keep_rejected = false) const;
+  const RobotProposerParams& params() const { return params_; }
+
+ private:
+  RobotProposerParams params_;
+  double robot_height_m_;
+  double robot_width_m_;
+};
+
+}  // namespace colorfree

@@ -1,0 +1,88 @@
+#include "colorfree/perception/robot_detector.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "colorfree/perception/cnn/shipped_nets.h"
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/param_file.h"
+
+namespace colorfree {
+
+RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
+  ParamFile f(path);
+  RobotDetectorParams p;
+  p.min_confidence = f.getInRange("min_confidence", 0, 1);
+  p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
+  f.finish();
+  return p;
+}
+
+RobotDetectorParams RobotDetectorParams::loadDefault() {
+  return load(defaultParamDir() + "/robot_detector.yaml");
+}
+
+cnn::PatchBox robotPatchBox(const RobotProposal& proposal) {
+  const PixelBox& b = proposal.box;
+  return {static_cast<float>(b.x0), static_cast<float>(b.y0), static_cast<float>(b.width()),
+          static_cast<float>(b.height())};
+}
+
+RobotDetector::RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net)
+    : params_(params), net_(std::move(robot_net)) {
+  if (net_.input().width != 24 || net_.input().height != 24 || net_.classes() != 2) {
+    throw Error("robot detector: RobotNet must take 24x24 patches and give 2 classes");
+  }
+}
+
+RobotDetector RobotDetector::loadDefault() {
+  const cnn::ShippedNet& s = cnn::kShippedNets[0];
+  return RobotDetector(RobotDetectorParams::loadDefault(),
+                       cnn::Classifier::load(s.cfgPath(), s.weightsPath()));
+}
+
+namespace {
+double boxIou(const PixelBox& a, const PixelBox& b) {
+  const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
+  const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
+  const double inter = ix * iy;
+  const double uni = a.width() * a.height() + b.width() * b.height() - inter;
+  return uni > 0 ? inter / uni : 0;
+}
+}  // namespace
+
+std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const CameraModel& camera,
+                                             const std::vector<RobotProposal>& proposals,
+                                             std::vector<float>* confidences) const {
+  std::vector<RobotPercept> out;
+  if (confidences) confidences->clear();
+  if (proposals.empty()) return out;
+  std::vector<cnn::PatchBox> boxes;
+  boxes.reserve(proposals.size());
+  for (const RobotProposal& p : proposals) boxes.push_back(robotPatchBox(p));
+  std::vector<float> probs;
+  net_.classify(image, boxes, probs);
+  std::vector<int> order;
+  for (std::size_t i = 0; i < proposals.size(); ++i) {
+    const float robot = probs[2 * i + 1];
+    if (confidences) confidences->push_back(robot);
+    if (robot >= params_.min_confidence) order.push_back(static_cast<int>(i));
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return probs[2 * a + 1] > probs[2 * b + 1]; });
+  for (int i : order) {
+    const RobotProposal& p = proposals[i];
+    bool overlaps = false;
+    for (const RobotPercept& kept : out) overlaps |= boxIou(kept.box, p.box) > params_.max_overlap_iou;
+    if (overlaps) continue;
+    RobotPercept r;
+    r.box = p.box;
+    r.feet_px = p.feet_px;
+    r.confidence = probs[2 * i + 1];
+    r.position_in_robot = camera.pixelToGround(p.feet_px);
+    out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace colorfree

@@ -1,0 +1,257 @@
+#include "colorfree/perception/robot_proposer.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/param_file.h"
+
+namespace colorfree {
+
+RobotProposerParams RobotProposerParams::load(const std::string& path) {
+  ParamFile f(path);
+  RobotProposerParams p;
+  p.column_step_px = static_cast<int>(f.getInRange("column_step_px", 1, 32));
+  p.min_jump_gray = f.getInRange("min_jump_gray", 1, 255);
+  p.jump_ratio = f.getInRange("jump_ratio", 0, 1);
+  p.carpet_update_weight = f.getInRange("carpet_update_weight", 0, 1);
+  p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
+  p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
+  p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
+  p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
+  p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
+  p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
+  p.min_width_fraction = f.getInRange("min_width_fraction", 0, 10);
+  p.split_width_factor = f.getInRange("split_width_factor", 1, 10);
+  p.box_width_factor = f.getInRange("box_width_factor", 0.1, 10);
+  p.box_height_factor = f.getInRange("box_height_factor", 0.1, 10);
+  p.box_below_feet_fraction = f.getInRange("box_below_feet_fraction", 0, 1);
+  p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
+  p.max_proposals = static_cast<int>(f.getInRange("max_proposals", 0, 1000));
+  f.finish();
+  return p;
+}
+
+RobotProposerParams RobotProposerParams::loadDefault() {
+  return load(defaultParamDir() + "/robot_proposer.yaml");
+}
+
+const char* robotRejectReasonName(RobotRejectReason reason) {
+  switch (reason) {
+    case RobotRejectReason::kRunTooShort: return "run too short";
+    case RobotRejectReason::kTooNarrow: return "too narrow";
+    case RobotRejectReason::kTooFar: return "too far";
+    case RobotRejectReason::kAboveHorizon: return "above horizon";
+    case RobotRejectReason::kOverlap: return "overlap";
+    case RobotRejectReason::kTooMany: return "too many";
+  }
+  return "?";
+}
+
+RobotProposer::RobotProposer(RobotProposerParams params, FieldDimensions field)
+    : params_(params), robot_height_m_(field.robot_height_m), robot_width_m_(field.robot_width_m) {}
+
+namespace {
+
+struct FeetPoint {
+  int x = 0;
+  int y = 0;               // first row below the run (the feet's lower edge)
+  double expected_h = 0;   // expected robot height there, px
+};
+
+struct Group {
+  int first_x = 0, last_x = 0;
+  std::vector<int> ys;
+  double expected_h = 0;
+  int last_y = 0;
+};
+
+double iou(const PixelBox& a, const PixelBox& b) {
+  const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
+  const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
+  const double inter = ix * iy;
+  const double uni = a.width() * a.height() + b.width() * b.height() - inter;
+  return uni > 0 ? inter / uni : 0;
+}
+
+}  // namespace
+
+RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& camera,
+                                  const IgnoreMask& ignore, const ContrastRegions& regions,
+                                  bool keep_rejected) const {
+  if (image.empty()) throw Error("robot proposer: empty image");
+  if (ignore.width != image.width || ignore.height != image.height) {
+    throw Error("robot proposer: ignore mask size does not match the image");
+  }
+  const RobotProposerParams& p = params_;
+  RobotProposals out;
+  const int win = regions.window_px;
+  const double width_per_height = robot_width_m_ / robot_height_m_;
+
+  std::vector<FeetPoint> feet;
+  const int step = p.column_step_px;
+  for (int wc = 0; wc < regions.columns; ++wc) {
+    bool any = false;
+    for (int r = 0; r < regions.rows && !any; ++r) any = regions.marked(wc, r);
+    if (!any) continue;
+    const int x_end = std::min(image.width, (wc + 1) * win);
+    for (int x = wc * win + step / 2; x < x_end; x += step) {
+      const int top = ignore.top_y[x];
+      const int bottom = ignore.bottom_y[x];
+      // Marked vertical stretches of this window column, bottom up.
+      int r = std::min(regions.rows - 1, (bottom - 1) / win);
+      while (r >= 0) {
+        while (r >= 0 && !regions.marked(wc, r)) --r;
+        if (r < 0) break;
+        int r_top = r;
+        while (r_top - 1 >= 0 && regions.marked(wc, r_top - 1)) --r_top;
+        const int y_hi = std::min(bottom - 1, (r + 1) * win - 1);
+        const int y_lo = std::max(top, r_top * win);
+        r = r_top - 1;
+        if (y_hi - y_lo < 2) continue;
+        double carpet = image.at(x, y_hi);
+        int y = y_hi;
+        while (y >= y_lo) {
+          const double v = image.at(x, y);
+          const double thr = std::max(p.min_jump_gray, p.jump_ratio * carpet);
+          // Shadows are darker than the carpet, the robots' feet and legs brighter.
+          if (v - carpet <= thr) {
+            carpet += p.carpet_update_weight * (v - carpet);
+            --y;
+            continue;
+          }
+          const int feet_y = y + 1;
+          const Eigen::Vector2d feet_px(x + 0.5, feet_y);
+          const auto expected = camera.robotHeightPx(feet_px, robot_height_m_);
+          if (!expected) {
+            if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kAboveHorizon});
+            break;
+          }
+          const int needed = static_cast<int>(std::ceil(p.min_run_height_fraction * *expected));
+          // Above the feet, most pixels up to the needed height must differ from the carpet
+          // (a robot's legs, with gaps at the joints); the contiguous part decides where the
+          // scan goes on when the run is rejected.
+          int run_top = y, gap = 0, filled = 0;
+          bool contiguous = true;
+          for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
+            if (image.at(x, yy) - carpet > thr) {
+              ++filled;
+              if (contiguous) run_top = yy;
+              gap = 0;
+            } else if (++gap > p.max_gap_px) {
+              contiguous = false;
+            }
+          }
+          if (*expected < p.min_expected_height_px) {
+            if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
+          } else if (filled >= p.min_fill_fraction * needed) {
+            feet.push_back({x, feet_y, *expected});
+            out.feet_points_px.push_back(feet_px);
+            break;  // one robot per scan line stretch: the lowest
+          } else if (keep_rejected) {
+            out.rejected.push_back({feet_px, RobotRejectReason::kRunTooShort});
+          }
+          y = run_top - 1;
+        }
+      }
+    }
+  }
+
+  // Join feet points of neighbouring scan lines (they arrive sorted by x).
+  std::vector<Group> groups;
+  std::vector<int> open;
+  for (const FeetPoint& f : feet) {
+    int best = -1;
+    double best_dy = 0;
+    for (int gi : open) {
+      Group& g = groups[gi];
+      const double max_gap = std::max(2.0 * step, p.join_gap_width_fraction * g.expected_h * width_per_height);
+      if (g.last_x < f.x - max_gap || g.last_x == f.x) continue;
+      const double tol = p.join_height_fraction * g.expected_h + 2;
+      const double dy = std::abs(f.y - g.last_y);
+      if (dy <= tol && (best < 0 || dy < best_dy)) {
+        best = gi;
+        best_dy = dy;
+      }
+    }
+    if (best < 0) {
+      groups.push_back({f.x, f.x, {f.y}, f.expected_h, f.y});
+      open.push_back(static_cast<int>(groups.size()) - 1);
+    } else {
+      Group& g = groups[best];
+      g.last_x = f.x;
+      g.last_y = f.y;
+      g.ys.push_back(f.y);
+      g.expected_h = std::max(g.expected_h, f.expected_h);
+    }
+    open.erase(std::remove_if(open.begin(), open.end(),
+                              [&](int gi) {
+                                return groups[gi].last_x <
+                                       f.x - std::max(2.0 * step, p.join_gap_width_fraction *
+                                                                      groups[gi].expected_h *
+                                                                      width_per_height);
+                              }),
+               open.end());
+  }
+
+  struct Candidate {
+    RobotProposal proposal;
+    double expected_h;
+  };
+  std::vector<Candidate> candidates;
+  for (Group& g : groups) {
+    std::nth_element(g.ys.begin(), g.ys.begin() + g.ys.size() / 2, g.ys.end());
+    const int feet_y = g.ys[g.ys.size() / 2];
+    const double cx = (g.first_x + g.last_x + 1) / 2.0;
+    const auto h = camera.robotHeightPx({cx, static_cast<double>(feet_y)}, robot_height_m_);
+    if (!h) continue;
+    const double w_expected = *h * width_per_height;
+    const double w = g.last_x - g.first_x + step;
+    if (w < p.min_width_fraction * w_expected) {
+      if (keep_rejected) out.rejected.push_back({{cx, double(feet_y)}, RobotRejectReason::kTooNarrow});
+      continue;
+    }
+    const int n = w > p.split_width_factor * w_expected
+                      ? std::max(1, static_cast<int>(std::lround(w / w_expected)))
+                      : 1;
+    for (int i = 0; i < n; ++i) {
+      const double x = g.first_x + (i + 0.5) * w / n;
+      RobotProposal rp;
+      rp.feet_px = {x, static_cast<double>(feet_y)};
+      const double bw = p.box_width_factor * w_expected;
+      rp.box.x0 = x - bw / 2;
+      rp.box.x1 = x + bw / 2;
+      rp.box.y1 = feet_y + p.box_below_feet_fraction * *h;
+      rp.box.y0 = rp.box.y1 - p.box_height_factor * *h;
+      candidates.push_back({rp, *h});
+    }
+  }
+  // Lower in the image first (nearer robots hide the ones behind).
+  std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.proposal.feet_px.y() > b.proposal.feet_px.y();
+  });
+  for (const Candidate& c : candidates) {
+    bool overlaps = false;
+    for (const RobotProposal& kept : out.proposals) {
+      // A feet point inside a nearer robot's box is that robot's knee, hip or arm.
+      const Eigen::Vector2d& f = c.proposal.feet_px;
+      const bool inside = f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() > kept.box.y0 &&
+                          f.y() < kept.feet_px.y() - 0.1 * kept.box.height();
+      if (inside || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
+        overlaps = true;
+        break;
+      }
+    }
+    if (overlaps || static_cast<int>(out.proposals.size()) >= p.max_proposals) {
+      if (keep_rejected) {
+        out.rejected.push_back(
+            {c.proposal.feet_px, overlaps ? RobotRejectReason::kOverlap : RobotRejectReason::kTooMany});
+      }
+      continue;
+    }
+    out.proposals.push_back(c.proposal);
+  }
+  return out;
+}
+
+}  // namespace colorfree
