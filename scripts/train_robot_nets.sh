@@ -8,7 +8,7 @@ WORK=${2:-/tmp/colorfree_robot_nets}
 CF="$BUILD/bin/colorfree"
 MODELS=${3:-perception/models}
 rm -rf "$WORK"
-"$CF" robot-data scenes/training/robot_detect_train.yaml scenes/training/robot_orientation_train.yaml \
+"$CF" robot-data scenes/train/robot_detect_train.yaml scenes/train/robot_orientation_train.yaml \
   --out "$WORK" --seed 11
 "$CF" train --cfg perception/models/robot_net.cfg --data "$WORK/robot_net" --classes none,robot \
   --out "$MODELS"/robot_net.weights --epochs 40 --patience 10 --seed 1 --quiet
