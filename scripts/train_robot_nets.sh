@@ -1,6 +1,6 @@
 #!/bin/sh
 # Regenerates {robot_net,ori_boost_net,ori_net}.weights (into perception/models unless told) from the training
-# scenarios in scenes/training (never the evaluation scenes). Deterministic: same code, same
+# scenarios in scenes/train (never the evaluation scenes). Deterministic: same code, same
 # weights. Usage: scripts/train_robot_nets.sh [build dir] [work dir] [models dir]
 set -eu
 BUILD=${1:-build}
