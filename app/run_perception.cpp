@@ -48,6 +48,20 @@ void addBallClassifierSamples(const Frame& frame, FramePercepts* out) {
   }
 }
 
+// RobotNet's decision on every robot proposal.
+void addRobotClassifierSamples(const Frame& frame, FramePercepts* out) {
+  if (!frame.robot_net_confidences || !frame.robot_proposals) return;
+  for (std::size_t i = 0; i < frame.robot_proposals->size(); ++i) {
+    ClassifierSample s;
+    s.classifier = "RobotNet";
+    s.object = ClassifierSample::Object::kRobot;
+    s.box = (*frame.robot_proposals)[i].box;
+    s.feet_px = (*frame.robot_proposals)[i].feet_px;
+    s.predicted_positive = (*frame.robot_net_confidences)[i] >= 0.5f;
+    out->classifier_samples.push_back(s);
+  }
+}
+
 }  // namespace
 
 PerceptionRunner::PerceptionRunner()
@@ -72,6 +86,7 @@ FramePercepts PerceptionRunner::process(const sim::RenderedFrame& rendered, cons
   addBallClassifierSamples(frame, &p);
   p.robot_proposals = frame.robot_proposals;
   p.robots = frame.robot_percepts;
+  addRobotClassifierSamples(frame, &p);
   p.orientation_stage = this_frame.timing(Stage::kRobotOrientation).has_value();
   if (frame.field_lines) {
     p.field_features = frame.field_lines->features;

@@ -130,8 +130,11 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
       frame.robot_proposals =
           robot_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions).proposals;
     });
-    timed(stats, Stage::kRobotDetector,
-          [&] { frame.robot_percepts = robot_detector_->run(image, frame.camera, *frame.robot_proposals); });
+    timed(stats, Stage::kRobotDetector, [&] {
+      std::vector<float> confidences;
+      frame.robot_percepts = robot_detector_->run(image, frame.camera, *frame.robot_proposals, &confidences);
+      frame.robot_net_confidences = std::move(confidences);
+    });
     timed(stats, Stage::kRobotOrientation, [&] {
       RobotTracks this_frame_only;
       robot_orientation_->run(image, frame.camera, *frame.robot_percepts, tracks ? *tracks : this_frame_only,

@@ -33,6 +33,8 @@ struct Frame {
   std::optional<FieldLineResult> field_lines;
   std::optional<std::vector<RobotProposal>> robot_proposals;
   std::optional<std::vector<RobotPercept>> robot_percepts;
+  /// RobotNet's robot probability per proposal (same order as robot_proposals).
+  std::optional<std::vector<float>> robot_net_confidences;
   std::optional<std::vector<BallProposal>> ball_proposals;
   std::optional<std::vector<BallPercept>> ball_percepts;
   /// The ball cascade's decision per proposal (same order as ball_proposals).
