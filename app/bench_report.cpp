@@ -24,7 +24,7 @@ const std::map<std::string, std::string> kStageTitles = {
     {"high_contrast", "High contrast regions"}, {"field_features", "Field lines & features"},
     {"robot_proposals", "Robot proposals"},     {"robot_detector", "Robot detector"},
     {"robot_orientation", "Robot orientation"}, {"ball_proposals", "Ball proposals"},
-    {"ball_detector", "Ball detector"}};
+    {"ball_detector", "Ball detector"}, {"ignore_regions", "Ignore regions"}};
 
 // The detectors charted against each swept setting: results.json counts (detected, truths) per case.
 struct SweptRate {
@@ -218,6 +218,59 @@ std::string belowText(const json& s, const std::string& metric) {
   return t.str();
 }
 
+// The detection set per lighting preset (its cases sweep `lighting.preset`): each detector's rate
+// and the pose error from field features (mean over the frames with a fit), from the per-case counts.
+json byLightingPreset(const json& d) {
+  struct Sums {
+    double ball_det = 0, ball_should = 0, robot_det = 0, robot_should = 0, lines_det = 0, lines_in_view = 0;
+    double pose_error_sum_mm = 0, fits = 0, pose_frames = 0;
+  };
+  std::map<std::string, Sums> by;
+  std::vector<std::string> order;
+  for (const auto& c : d.at("cases")) {
+    if (!c.at("settings").contains("lighting.preset")) continue;
+    const std::string name = c.at("settings").at("lighting.preset").get<std::string>();
+    if (!by.count(name)) order.push_back(name);
+    Sums& s = by[name];
+    auto num = [&](const std::string& path) {
+      const json& v = at(c, path);
+      return v.is_number() ? v.get<double>() : 0.0;
+    };
+    s.ball_det += num("ball.counts.detected");
+    s.ball_should += num("ball.counts.truths");
+    s.robot_det += num("robot.counts.detected");
+    s.robot_should += num("robot.counts.truths");
+    s.lines_det += num("field_features.counts.lines_detected");
+    s.lines_in_view += num("field_features.counts.lines_in_view");
+    const double fits = num("field_features.counts.pose_fits");
+    if (fits > 0) s.pose_error_sum_mm += num("field_features.pose_error_mm") * fits;
+    s.fits += fits;
+    s.pose_frames += num("field_features.counts.pose_frames");
+  }
+  json rows = json::array();
+  auto rate = [](double a, double b) { return b > 0 ? json(a / b) : json(nullptr); };
+  for (const auto& name : order) {
+    const Sums& s = by.at(name);
+    rows.push_back({{"preset", name},
+                    {"ball_detection_rate", rate(s.ball_det, s.ball_should)},
+                    {"robot_detection_rate", rate(s.robot_det, s.robot_should)},
+                    {"line_detection_rate", rate(s.lines_det, s.lines_in_view)},
+                    {"pose_error_mm", rate(s.pose_error_sum_mm, s.fits)},
+                    {"pose_fit_rate", rate(s.fits, s.pose_frames)}});
+  }
+  return rows;
+}
+
+// Table 1's accuracy: each net on the samples of the detection set that reached it (held out from
+// training), else what the shipped table says (untrained, or no held-out data).
+std::string cnnAccuracy(const json& results, const json& row) {
+  const json& net = at(results, "summary.cnn_accuracy.nets." + row.at("net").get<std::string>());
+  if (at(net, "accuracy").is_number()) {
+    return fmt(net.at("accuracy"), 3) + " (" + std::to_string(net.at("samples").get<long>()) + ")";
+  }
+  return row.at("accuracy").get<std::string>();
+}
+
 }  // namespace
 
 json benchSummary(const BenchPlan& plan, const json& experiments) {
@@ -239,7 +292,8 @@ json benchSummary(const BenchPlan& plan, const json& experiments) {
                            {"pose_fit_rate", at(*d, "field_features.pose_fit_rate")},
                            {"line_detection_rate", at(*d, "field_features.line_detection_rate")},
                            {"intersection_detection_rate", at(*d, "field_features.intersection_detection_rate")},
-                           {"paper_pose_error_mm", 40.07}};
+                           {"paper_pose_error_mm", 40.07},
+                           {"by_lighting_preset", byLightingPreset(*d)}};
     json prof = json::array();
     std::vector<std::string> order = paperStageNames();
     for (auto it = at(*d, "timing_ms").begin(); it != at(*d, "timing_ms").end(); ++it) {
@@ -254,6 +308,7 @@ json benchSummary(const BenchPlan& plan, const json& experiments) {
                       {"paper_max_ms", p != kPaperStagesMs.end() ? json(p->second.second) : json(nullptr)}});
     }
     s["table3"] = {{"experiment", id}, {"stages", prof}};
+    s["cnn_accuracy"] = {{"experiment", id}, {"nets", at(*d, "cnn")}};
   }
   if (const json* o = experimentWithRole(plan, experiments, ExperimentRole::kOrientationStatic, &id)) {
     s["orientation_static"] = orientationSummary(*o, id, 0.9988);
@@ -326,6 +381,16 @@ void printBenchTables(const json& results) {
                 fmt(f.at("paper_pose_error_mm"), 2).c_str());
     std::printf("  line detection rate %s, L/T/X detection rate %s\n", fmt(f.at("line_detection_rate")).c_str(),
                 fmt(f.at("intersection_detection_rate")).c_str());
+    if (f.contains("by_lighting_preset") && !f.at("by_lighting_preset").empty()) {
+      std::printf("  per lighting preset:  %12s %14s %14s %12s %10s\n", "ball det.", "robot det.", "line det.",
+                  "pose err mm", "fit rate");
+      for (const auto& r : f.at("by_lighting_preset")) {
+        std::printf("  %-20s %12s %14s %14s %12s %10s\n", r.at("preset").get<std::string>().c_str(),
+                    fmt(r.at("ball_detection_rate")).c_str(), fmt(r.at("robot_detection_rate")).c_str(),
+                    fmt(r.at("line_detection_rate")).c_str(), fmt(r.at("pose_error_mm"), 1).c_str(),
+                    fmt(r.at("pose_fit_rate")).c_str());
+      }
+    }
   }
   if (s.contains("table3")) {
     std::printf("\nTable 3: profiling, ms per frame (ours: this machine while rendering; paper: NAO V5)\n");
@@ -339,7 +404,8 @@ void printBenchTables(const json& results) {
     }
   }
   if (results.contains("cnn_table") && !results.at("cnn_table").empty()) {
-    std::printf("\nTable 1: CNN classifiers (time: this machine, one core, median)\n");
+    std::printf("\nTable 1: CNN classifiers (time: this machine, one core, median; accuracy: on the detection set's\n"
+                "samples that reach each net, their count in brackets)\n");
     std::printf("  %-13s %-8s %15s %10s %10s %9s %-17s %6s\n", "net", "input", "params (paper)", "us single",
                 "us batch16", "paper ms", "accuracy", "paper");
     for (const auto& r : results.at("cnn_table")) {
@@ -348,7 +414,7 @@ void printBenchTables(const json& results) {
       std::printf("  %-13s %-8s %15s %10.2f %10.2f %9.3f %-17s %6.3f\n", r.at("net").get<std::string>().c_str(),
                   r.at("input").get<std::string>().c_str(), params.c_str(), r.at("us_per_patch_single").get<double>(),
                   r.at("us_per_patch_batch16").get<double>(), r.at("paper_time_ms").get<double>(),
-                  r.at("accuracy").get<std::string>().c_str(), r.at("paper_accuracy").get<double>());
+                  cnnAccuracy(results, r).c_str(), r.at("paper_accuracy").get<double>());
     }
   }
   if (s.contains("sweeps") && !s.at("sweeps").empty()) {
@@ -443,6 +509,16 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
       << cell(f.at("pose_error_mm"), 1) << "</td><td class=paper>40.07</td></tr><tr><td>RMS (mm)</td><td>"
       << cell(f.at("pose_error_rms_mm"), 1) << "</td><td class=paper>&ndash;</td></tr><tr><td>frames with a fit</td><td>"
       << cell(f.at("pose_fit_rate")) << "</td><td class=paper>&ndash;</td></tr></table>";
+    if (f.contains("by_lighting_preset") && !f.at("by_lighting_preset").empty()) {
+      h << "<h3>Per lighting preset (detection set)</h3><table><tr><th>preset</th><th>ball detection</th><th>robot "
+           "detection</th><th>line detection</th><th>pose error mm</th><th>frames with a fit</th></tr>";
+      for (const auto& r : f.at("by_lighting_preset")) {
+        h << "<tr><td>" << esc(r.at("preset").get<std::string>()) << "</td><td>" << cell(r.at("ball_detection_rate"))
+          << "</td><td>" << cell(r.at("robot_detection_rate")) << "</td><td>" << cell(r.at("line_detection_rate"))
+          << "</td><td>" << cell(r.at("pose_error_mm"), 1) << "</td><td>" << cell(r.at("pose_fit_rate")) << "</td></tr>";
+      }
+      h << "</table>";
+    }
   }
   if (s.contains("table3")) {
     h << "<h2>Table 3: profiling</h2><p>Ours: this machine, while rendering in parallel; paper: NAO V5.</p><table><tr>"
@@ -464,7 +540,7 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
     h << "<tr><td>" << esc(r.at("net").get<std::string>()) << "</td><td>" << esc(r.at("input").get<std::string>())
       << "</td><td>" << r.at("parameters") << "</td><td class=paper>" << r.at("paper_parameters") << "</td><td>"
       << fmt(r.at("us_per_patch_single"), 2) << "</td><td>" << fmt(r.at("us_per_patch_batch16"), 2)
-      << "</td><td class=paper>" << fmt(r.at("paper_time_ms")) << "</td><td>" << esc(r.at("accuracy").get<std::string>())
+      << "</td><td class=paper>" << fmt(r.at("paper_time_ms")) << "</td><td>" << esc(cnnAccuracy(results, r))
       << "</td><td class=paper>" << fmt(r.at("paper_accuracy")) << "</td></tr>";
   }
   h << "</table><h2 id=sweeps>Sweeps: where each detector falls below its target</h2>";
