@@ -20,4 +20,19 @@ rc=$?
 [ "$rc" -eq 2 ] || fail "unknown metric: exit $rc, expected 2"
 grep -q "ball.detecton_rate" "$out/unknown.stderr" || fail "the unknown metric is not named: $(cat "$out/unknown.stderr")"
 [ ! -e "$out/unknown/results.json" ] || fail "results.json written for a run that never started"
+# --expect replaces the scenario's expectations: a floor that holds passes, one that does not fails
+# naming it, and an unknown metric stops before rendering.
+"$bin" run "$here/tiny_unmet.yaml" --out "$out/floor" --quiet --expect "ball.proposals_per_frame <= 1000" \
+  >/dev/null 2>"$out/floor.stderr"
+rc=$?
+[ "$rc" -eq 0 ] || fail "--expect that holds: exit $rc, expected 0: $(cat "$out/floor.stderr")"
+"$bin" run "$here/tiny_unmet.yaml" --out "$out/floor2" --quiet --expect "ball.proposals_per_frame >= 1000" \
+  >/dev/null 2>"$out/floor2.stderr"
+rc=$?
+[ "$rc" -eq 1 ] || fail "--expect not met: exit $rc, expected 1"
+grep -Eq "ball.proposals_per_frame = [0-9.]+, expected >= 1000" "$out/floor2.stderr" || fail "no floor in: $(cat "$out/floor2.stderr")"
+"$bin" run "$here/tiny_unmet.yaml" --out "$out/floor3" --quiet --expect "ball.proposals_per_frme >= 1" \
+  >/dev/null 2>"$out/floor3.stderr"
+rc=$?
+[ "$rc" -eq 2 ] || fail "--expect with an unknown metric: exit $rc, expected 2"
 echo "ok"

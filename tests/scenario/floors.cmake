@@ -1,0 +1,17 @@
+# Regression floors for CI (see CMakeLists.txt): colorfree_floor_test(name scenario frames_per_case
+# "metric op floor" ...). Each floor: the value measured on this code (in the comment) less a small
+# margin. The scenario files keep the issues' targets; `colorfree run SCENARIO` checks those.
+
+# Ball, game-like set (12 cases x 4 frames). Measured: proposal recall 0.750, detection 0.708,
+# false positives 0.062 per frame.
+colorfree_floor_test(ball_game_floor ball_game.yaml 4
+  "ball.proposal_recall >= 0.70" "ball.detection_rate >= 0.65" "ball.false_positives_per_frame <= 0.10")
+
+# Ball, hard set (4 cases x 6 frames). Measured: proposal recall 0.625, detection 0.500.
+colorfree_floor_test(ball_hard_floor ball_hard.yaml 6
+  "ball.proposal_recall >= 0.58" "ball.detection_rate >= 0.45")
+
+# Robots, CI-sized detection set (4 cases x 4 frames). Measured: proposal recall 0.812, detection
+# 0.625, false positives 0.125 per frame.
+colorfree_floor_test(robot_detection_floor ci/robot_detection_ci.yaml 4
+  "robot.proposal_recall >= 0.75" "robot.detection_rate >= 0.56" "robot.false_positives_per_frame <= 0.19")
