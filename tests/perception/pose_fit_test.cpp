@@ -112,6 +112,39 @@ TEST(PoseFit, NoisyFeaturesGiveACentimetreError) {
   EXPECT_LT(sum / n, 0.03);
 }
 
+TEST(PoseFit, AHeadingErrorDoesNotSlideTheFitOntoTheNextPattern) {
+  // What the field-line stage found on a rendered top-camera frame from the centre spot looking at
+  // the far goal (robot frame, metres): the penalty area's front line, the goal line in two
+  // pieces, the goal area's lines and side lines, two L intersections. A guess 5 degrees off moves
+  // them 0.35 m sideways and the goal area's side lines (y = 1.1) then lie nearer the penalty
+  // area's (y = 2.0): the fit must take the heading from the lines' directions first.
+  FieldFeatures f;
+  const double lines[][4] = {{2.856, -1.645, 2.856, 1.640}, {4.476, -1.920, 4.476, -0.881},
+                             {4.459, 2.011, 4.484, 1.198},  {3.811, 1.975, 4.491, 2.190},
+                             {3.909, 1.119, 4.482, 1.060},  {3.907, 1.103, 3.907, 0.536},
+                             {3.907, -0.543, 3.907, -1.110}};
+  for (const auto& l : lines) {
+    LinePercept p;
+    p.start_in_robot = {l[0], l[1]};
+    p.end_in_robot = {l[2], l[3]};
+    f.lines.push_back(p);
+  }
+  for (const Eigen::Vector2d& x : {Eigen::Vector2d(4.488, 1.059), Eigen::Vector2d(3.907, 1.119)}) {
+    IntersectionPercept p;
+    p.type = IntersectionType::kL;
+    p.position_in_robot = x;
+    f.intersections.push_back(p);
+  }
+  const FieldPose truth{0, 0, 0};
+  const PoseFitter fitter;
+  for (const double sign : {1.0, -1.0}) {
+    const FieldPose guess{0.14, 0.14 * sign, sign * 5 * kPi / 180};
+    const PoseFitResult r = fitter.fit(f, guess);
+    ASSERT_TRUE(r.ok);
+    EXPECT_LT(positionError(r.pose, truth), 0.08) << r.pose.x_m << " " << r.pose.y_m;
+  }
+}
+
 TEST(PoseFit, ParallelLinesAloneDoNotFixThePose) {
   FieldFeatures f;
   LinePercept l;

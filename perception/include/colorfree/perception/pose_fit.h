@@ -37,6 +37,10 @@ struct PoseFitParams {
   /// Associations farther than this from every model element are left out in an iteration.
   double max_association_m = 0.8;
   double intersection_weight = 2.0;     ///< relative to one line sample
+  /// The heading is first corrected so the detected lines (at least this long) run along x or y,
+  /// by at most this much.
+  double heading_prior_min_line_m = 0.3;
+  double heading_prior_max_correction_deg = 20;
   double circle_weight = 4.0;
   double penalty_mark_weight = 2.0;
   double converged_step_m = 1e-6;
