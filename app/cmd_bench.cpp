@@ -49,24 +49,6 @@ ScoringParams scoringFor(const BenchExperiment& e) {
   return p;
 }
 
-CaseInfo caseInfo(const sim::ScenarioCase& sc) {
-  CaseInfo info;
-  info.name = sc.name();
-  for (const auto& v : sc.values) {
-    try {
-      std::size_t used = 0;
-      const double x = std::stod(v.value, &used);
-      if (used == v.value.size()) {
-        info.numeric_settings[v.path] = x;
-        continue;
-      }
-    } catch (const std::exception&) {
-    }
-    info.text_settings[v.path] = v.value;
-  }
-  return info;
-}
-
 std::string itemName(const BenchPlan& plan, const WorkItem& item) {
   if (item.experiment < 0) return "cnn_table";
   char buf[32];

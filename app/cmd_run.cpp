@@ -148,20 +148,7 @@ void addRunCommand(CLI::App& app, int& exit_code) {
     bar.update(0, total, "");
     for (int c : cases) {
       const sim::ScenarioCase& sc = runner.scenarioCase(c);
-      CaseInfo info;
-      info.name = sc.name();
-      for (const auto& v : sc.values) {
-        try {
-          std::size_t used = 0;
-          const double x = std::stod(v.value, &used);
-          if (used == v.value.size()) {
-            info.numeric_settings[v.path] = x;
-            continue;
-          }
-        } catch (const std::exception&) {
-        }
-        info.text_settings[v.path] = v.value;
-      }
+      const CaseInfo info = caseInfo(sc);
       scorer.beginCase(info);
       perception.beginCase();
       const std::string frame_dir = args->out + "/frames/" + caseFolder(c);

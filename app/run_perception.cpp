@@ -64,6 +64,24 @@ void addRobotClassifierSamples(const Frame& frame, FramePercepts* out) {
 
 }  // namespace
 
+CaseInfo caseInfo(const sim::ScenarioCase& scenario_case) {
+  CaseInfo info;
+  info.name = scenario_case.name();
+  for (const auto& v : scenario_case.values) {
+    try {
+      std::size_t used = 0;
+      const double x = std::stod(v.value, &used);
+      if (used == v.value.size()) {
+        info.numeric_settings[v.path] = x;
+        continue;
+      }
+    } catch (const std::exception&) {
+    }
+    info.text_settings[v.path] = v.value;
+  }
+  return info;
+}
+
 PerceptionRunner::PerceptionRunner()
     : pipeline_(PipelineConfig::loadDefault()),
       pose_fitter_(PoseFitParams::loadDefault(), FieldDimensions::loadDefault()) {}

@@ -31,6 +31,9 @@ class PerceptionRunner {
   RobotTracks tracks_;
 };
 
+/// The scorer's description of a scenario case: its name and swept settings (numbers as numbers).
+CaseInfo caseInfo(const sim::ScenarioCase& scenario_case);
+
 /// results.json's key for a pipeline stage (the paper's rows: high_contrast, field_features, ...).
 std::string stageKey(Stage stage);
 
