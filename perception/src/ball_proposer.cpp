@@ -27,6 +27,12 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.feet_region_diameters = f.getInRange("feet_region_diameters", 0, 20);
   p.feet_boost = f.getInRange("feet_boost", 0, 10);
   p.texture_weight = f.getInRange("texture_weight", 0, 10);
+  p.texture_reference_radius_px = f.getInRange("texture_reference_radius_px", 1, 100);
+  p.texture_scale_exponent = f.getInRange("texture_scale_exponent", 0, 2);
+  p.robot_body_factor = f.getInRange("robot_body_factor", 0, 1);
+  p.centre_search_fraction = f.getInRange("centre_search_fraction", 0, 2);
+  p.radius_tolerance = f.getInRange("radius_tolerance", 0, 0.5);
+  p.min_gradient = f.getInRange("min_gradient", 0, 255);
   f.finish();
   if (p.line_count > p.max_count) throw Error(path + ": line_count must not exceed max_count");
   if (p.max_radius_px <= p.min_radius_px) {
@@ -59,19 +65,38 @@ struct Candidate {
 // clamped to the region (which covers every box the scan asks for, clamped to the image).
 class Integral {
  public:
-  Integral(const GrayView& image, int x0, int y0, int x1, int y1)
+  // `edges`: the integral of the pixel's edge strength |right - here| + |below - here| instead of
+  // its grey level (the ball's print is full of edges; carpet, lines and robots' feet have few).
+  Integral(const GrayView& image, int x0, int y0, int x1, int y1, bool edges = false)
       : x0_(x0), y0_(y0), w_(x1 - x0), h_(y1 - y0), stride_(w_ + 1),
         sums_(static_cast<std::size_t>(stride_) * (h_ + 1), 0u) {
     for (int y = 0; y < h_; ++y) {
       const std::uint8_t* src = image.row(y0 + y) + x0;
+      const std::uint8_t* below = image.row(std::min(y0 + y + 1, image.height - 1)) + x0;
       const std::uint32_t* above = sums_.data() + static_cast<std::size_t>(y) * stride_;
       std::uint32_t* out = sums_.data() + static_cast<std::size_t>(y + 1) * stride_;
       std::uint32_t run = 0;
-      for (int x = 0; x < w_; ++x) {
-        run += src[x];
-        out[x + 1] = above[x + 1] + run;
+      if (!edges) {
+        for (int x = 0; x < w_; ++x) {
+          run += src[x];
+          out[x + 1] = above[x + 1] + run;
+        }
+      } else {
+        const int last = x0 + w_ < image.width ? w_ : w_ - 1;
+        for (int x = 0; x < w_; ++x) {
+          const int right = x < last ? src[x + 1] : src[x];
+          run += static_cast<std::uint32_t>(std::abs(right - src[x]) + std::abs(below[x] - src[x]));
+          out[x + 1] = above[x + 1] + run;
+        }
       }
     }
+  }
+  // Mean over the box [x0, x1) x [y0, y1) (clamped into the region); 0 for an empty box.
+  float mean(int x0, int y0, int x1, int y1) const {
+    x0 = clampX(x0), x1 = clampX(x1), y0 = clampY(y0), y1 = clampY(y1);
+    const int area = (x1 - x0) * (y1 - y0);
+    if (area <= 0) return 0.f;
+    return static_cast<float>(at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0)) / static_cast<float>(area);
   }
   // Integral value at image coordinates (x, y) (the sum of pixels left of x and above y),
   // coordinates clamped into the region.
@@ -92,7 +117,7 @@ class Integral {
 // Centre mean minus, over the four pairs of opposite surround cells, the brightest pair's darker
 // cell (a line or a crossing through the centre lights both cells of a pair; a robot's foot or a
 // line beside the ball only one), plus the print term: the spread of the centre's four quadrants.
-float response(const Integral& ii, int x, int y, double r, const BallProposerParams& p,
+float response(const Integral& ii, const Integral& ei, int x, int y, double r, const BallProposerParams& p,
                float* on_line = nullptr) {
   const int a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
   const int b = std::max(a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
@@ -140,6 +165,12 @@ float response(const Integral& ii, int x, int y, double r, const BallProposerPar
   const float ring = static_cast<float>(outer_sum - inner_sum) / static_cast<float>(ring_area);
   surround = std::max(surround, ring);
   float dog = mean[1][1] - surround;
+  if (p.texture_weight > 0) {
+    const float texture = ei.mean(xs[1], ys[1], xs[2], ys[2]) *
+                          static_cast<float>(std::pow(r / p.texture_reference_radius_px, p.texture_scale_exponent));
+    dog += static_cast<float>(p.texture_weight) * texture;
+    if (on_line) *on_line += static_cast<float>(p.texture_weight) * texture;
+  }
   if (p.print_weight > 0) {
     const int cx = std::clamp(x, xs[1], xs[2]);
     const int cy = std::clamp(y, ys[1], ys[2]);
@@ -160,6 +191,61 @@ float response(const Integral& ii, int x, int y, double r, const BallProposerPar
     if (hi >= lo) dog += static_cast<float>(p.print_weight) * (hi - lo);
   }
   return dog;
+}
+
+// Circle-centre voting around (x, y): every pixel within the outline's reach whose gradient is
+// strong votes for the points r along its gradient, both ways (the ball is brighter than the
+// carpet, or darker when the carpet is overexposed), over radii (1 ± radius_tolerance) r; the votes
+// are accumulated on a grid of cells about r / 8 wide within centre_search_fraction r of (x, y) and
+// smoothed over 3x3 cells. Returns (x, y) when no cell gets votes.
+Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p) {
+  const double search = p.centre_search_fraction * r;
+  if (search < 1) return {x, y};
+  const int cell = std::max(1, static_cast<int>(r / 8));
+  const int half = static_cast<int>(std::ceil(search / cell));
+  const int n = 2 * half + 1;
+  std::vector<float> acc(static_cast<std::size_t>(n) * n, 0.f);
+  const double reach = search + (1 + p.radius_tolerance) * r + 1;
+  const int x0 = std::max(1, static_cast<int>(x - reach)), x1 = std::min(image.width - 2, static_cast<int>(x + reach));
+  const int y0 = std::max(1, static_cast<int>(y - reach)), y1 = std::min(image.height - 2, static_cast<int>(y + reach));
+  const double radii[3] = {(1 - p.radius_tolerance) * r, r, (1 + p.radius_tolerance) * r};
+  const float min_grad = static_cast<float>(p.min_gradient);
+  for (int py = y0; py <= y1; py += cell) {
+    const std::uint8_t* up = image.row(py - 1);
+    const std::uint8_t* row = image.row(py);
+    const std::uint8_t* down = image.row(py + 1);
+    for (int px = x0; px <= x1; px += cell) {
+      const float gx = 0.5f * (static_cast<float>(row[px + 1]) - row[px - 1]);
+      const float gy = 0.5f * (static_cast<float>(down[px]) - up[px]);
+      const float g2 = gx * gx + gy * gy;
+      if (g2 < min_grad * min_grad) continue;
+      const float g = std::sqrt(g2);
+      const double ux = gx / g, uy = gy / g;
+      for (const double rr : radii) {
+        for (const double sign : {1.0, -1.0}) {
+          const double cx = px + 0.5 + sign * rr * ux - x, cy = py + 0.5 + sign * rr * uy - y;
+          const int i = static_cast<int>(std::lround(cx / cell)) + half;
+          const int j = static_cast<int>(std::lround(cy / cell)) + half;
+          if (i < 0 || j < 0 || i >= n || j >= n) continue;
+          acc[static_cast<std::size_t>(j) * n + i] += g;
+        }
+      }
+    }
+  }
+  float best = 0;
+  int bi = half, bj = half;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double di = (i - half) * cell, dj = (j - half) * cell;
+      if (di * di + dj * dj > search * search) continue;
+      float v = 0;
+      for (int b = std::max(0, j - 1); b <= std::min(n - 1, j + 1); ++b) {
+        for (int a = std::max(0, i - 1); a <= std::min(n - 1, i + 1); ++a) v += acc[static_cast<std::size_t>(b) * n + a];
+      }
+      if (v > best) best = v, bi = i, bj = j;
+    }
+  }
+  return {x + (bi - half) * cell, y + (bj - half) * cell};
 }
 
 }  // namespace
@@ -222,6 +308,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   rx1 = std::min(rx1, image.width);
   ry1 = std::min(ry1, image.height);
   const Integral ii(image, rx0, ry0, rx1, ry1);
+  const Integral ei(image, rx0, ry0, rx1, ry1, true);
 
   std::vector<Candidate> candidates;
   std::vector<Candidate> line_candidates;
@@ -252,7 +339,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       for (int x = x_start; x < rc.x1; x += step) {
         if (!ignore.looked(x, yy)) continue;
         float line_resp = 0;
-        const float resp = response(ii, x, yy, r, p, &line_resp) * static_cast<float>(rc.boost);
+        const float resp = response(ii, ei, x, yy, r, p, &line_resp) * static_cast<float>(rc.boost);
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }
@@ -272,27 +359,19 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
     candidates.insert(candidates.end(), best.begin(), best.end());
     if (best_line.response >= p.line_min_response) line_candidates.push_back(best_line);
   }
-  // Ranking: the ball's black print makes its centre box textured where robots' feet and hands,
-  // lines and marks are flat; the per-window winners (placed by the DoG) are ranked by the DoG
-  // plus texture_weight × the standard deviation of the centre box's pixels.
-  if (p.texture_weight > 0) {
-    for (Candidate& c : candidates) {
-      const int a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * c.r)));
-      const int sub = std::max(1, a / 4);
-      const int cx = static_cast<int>(c.x), cy = static_cast<int>(c.y);
-      double sum = 0, sq = 0;
-      int n = 0;
-      for (int y = std::max(0, cy - a); y <= std::min(image.height - 1, cy + a); y += sub) {
-        const std::uint8_t* row = image.row(y);
-        for (int x = std::max(0, cx - a); x <= std::min(image.width - 1, cx + a); x += sub) {
-          sum += row[x];
-          sq += static_cast<double>(row[x]) * row[x];
-          ++n;
+  // Robots' bodies above their feet regions (white, textured parts) cannot hold a visible ball
+  // lying on the ground in front of them: their candidates count robot_body_factor of their response.
+  if (robots != nullptr && p.robot_body_factor < 1) {
+    for (const RobotPercept& robot : *robots) {
+      const auto rad = camera.ballRadiusPx(robot.feet_px, p.ball_radius_m);
+      if (!rad) continue;
+      const double top_of_feet = robot.feet_px.y() - p.feet_region_diameters * *rad;
+      for (std::vector<Candidate>* list : {&candidates, &line_candidates}) {
+        for (Candidate& c : *list) {
+          if (c.x >= robot.box.x0 && c.x <= robot.box.x1 && c.y >= robot.box.y0 && c.y < top_of_feet) {
+            c.response *= static_cast<float>(p.robot_body_factor);
+          }
         }
-      }
-      if (n > 1) {
-        const double mean = sum / n;
-        c.response += static_cast<float>(p.texture_weight * std::sqrt(std::max(0.0, sq / n - mean * mean)));
       }
     }
   }
@@ -304,44 +383,30 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   std::stable_sort(candidates.begin(), candidates.end(), by_response);
   std::stable_sort(line_candidates.begin(), line_candidates.end(), by_response);
   std::vector<BallProposal> out;
+  std::vector<Eigen::Vector2d> raw_centres;  // the scan's positions of the proposals in `out`
+  const auto near = [&](double x, double y, double r) {
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      const double d = p.nms_fraction * std::max<double>(r, out[k].radius_px);
+      for (const Eigen::Vector2d& o : {out[k].centre_px, raw_centres[k]}) {
+        const double dx = x - o.x(), dy = y - o.y();
+        if (dx * dx + dy * dy < d * d) return true;
+      }
+    }
+    return false;
+  };
   const auto take = [&](const std::vector<Candidate>& list, int limit) {
     for (const Candidate& c : list) {
       if (static_cast<int>(out.size()) >= limit) break;
-      bool suppressed = false;
-      for (const BallProposal& o : out) {
-        const double d = p.nms_fraction * std::max<double>(c.r, o.radius_px);
-        const double dx = c.x - o.centre_px.x(), dy = c.y - o.centre_px.y();
-        if (dx * dx + dy * dy < d * d) {
-          suppressed = true;
-          break;
-        }
-      }
-      if (suppressed) continue;
-      // Refine the centre at single pixels within the scan step around the winner.
-      const int step = std::max(1, static_cast<int>(p.step_fraction * c.r));
-      const int cx = static_cast<int>(c.x), cy = static_cast<int>(c.y);
-      float best_resp = c.response;
-      int bx = cx, by = cy;
-      const bool line = &list == &line_candidates;
-      const auto score = [&](int x, int y) {
-        float on_line = 0;
-        const float r1 = response(ii, x, y, c.r, p, &on_line);
-        return line ? on_line : r1;
-      };
-      const float base = score(cx, cy);
-      float best_base = base;
-      for (int dy = -step / 2; dy <= step / 2 && step > 1; ++dy) {
-        for (int dx = -step / 2; dx <= step / 2; ++dx) {
-          const int x = cx + dx, y = cy + dy;
-          if ((dx == 0 && dy == 0) || !image.contains(x, y) || !ignore.looked(x, y)) continue;
-          const float r2 = score(x, y);
-          if (r2 > best_base) best_base = r2, bx = x, by = y;
-        }
-      }
+      if (near(c.x, c.y, c.r)) continue;
+      // The centre: where the outline's gradients point to at the expected radius (robust to the
+      // shading of the ball's lower half and to its shadow, which pull the DoG's peak upwards).
+      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p);
+      if (near(centre.x(), centre.y(), c.r)) continue;  // the same ball as an earlier one
       BallProposal prop;
-      prop.centre_px = {bx + 0.5, by + 0.5};
+      prop.centre_px = centre;
       prop.radius_px = c.r;
-      prop.response = best_resp + (best_base - base);
+      prop.response = c.response;
+      raw_centres.emplace_back(c.x, c.y);
       out.push_back(prop);
     }
   };

@@ -80,9 +80,9 @@ TEST_P(DrawnBallAt, TexturedCarpetFoundWhereItIs) {
 
 INSTANTIATE_TEST_SUITE_P(Distances, DrawnBallAt, ::testing::Values(0.8, 1.5, 3.0));
 
-// KNOWN FAILURE (disabled, see README "Ball detection"): a ball lying on a line straight ahead is
-// not proposed; the line's own on-line responses are as strong as the ball's.
-TEST(BallDetection, DISABLED_LineThroughTheBall) {
+// A ball lying on a line straight ahead, a crossing line behind it: the line lights the ball's
+// surround, so the print's edges (the texture term) must carry it.
+TEST(BallDetection, LineThroughTheBall) {
   const CameraModel cam = test::testCamera(22);
   test::SyntheticScene scene = carpetOnly(4);
   scene.segments.push_back({{0.5, 0.0}, {4.0, 0.0}});   // a line along x ...

@@ -30,7 +30,7 @@ struct BallProposerParams {
   /// The ball's black print: the spread (brightest minus darkest mean) of the centre box's four
   /// quadrants is added to the response with this weight.
   double print_weight = 0.0;
-  double min_response = 6.0;        ///< grey levels; weaker responses never become proposals
+  double min_response = 40.0;       ///< grey levels; weaker responses never become proposals
   int per_window_count = 1;         ///< best responses kept per 16×16 window (grid cell)
   /// Two proposals closer than nms_fraction × the larger radius: only the stronger one is kept.
   double nms_fraction = 1.0;
@@ -44,9 +44,22 @@ struct BallProposerParams {
   /// scanned too (when robot percepts exist), and its responses are multiplied by feet_boost.
   double feet_region_diameters = 3.0;
   double feet_boost = 1.5;
-  /// Ranking of the per-window winners: DoG + texture_weight × standard deviation of the centre
-  /// box (the ball's print is textured; feet, hands, lines and marks are flat).
-  double texture_weight = 1.0;
+  /// Candidates inside a detected robot's box above its feet region: response × this.
+  double robot_body_factor = 0.5;
+  /// The response adds texture_weight × the mean edge strength (|horizontal| + |vertical| grey
+  /// level difference to the next pixel) in the centre box: the ball's print is full of edges where
+  /// feet, hands, lines, marks and an overexposed carpet are flat.
+  double texture_weight = 2.0;
+  /// The edge density of the print falls with the ball's size: the texture term is multiplied by
+  /// (radius / texture_reference_radius_px) ^ texture_scale_exponent.
+  double texture_reference_radius_px = 8.0;
+  double texture_scale_exponent = 0.75;
+  /// Centring of the kept proposals: circle-centre voting by the gradients around the winner at
+  /// radii (1 ± radius_tolerance) × the expected radius, within centre_search_fraction × radius;
+  /// pixels with a gradient below min_gradient (grey levels per pixel) do not vote.
+  double centre_search_fraction = 1.0;
+  double radius_tolerance = 0.12;
+  double min_gradient = 6.0;
 
   bool operator==(const BallProposerParams&) const = default;
   static BallProposerParams load(const std::string& path);

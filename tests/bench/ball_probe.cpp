@@ -1,0 +1,100 @@
+// Development probe (not in CTest): renders the frames of a scenario and prints, per frame, the
+// true ball, every ball proposal (distance to the truth, match, both nets' scores) and the percepts,
+// so a miss can be traced to the proposer or to the nets.
+//   ball_probe SCENARIO [frames_per_case] [case] [--png DIR]
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "colorfree/groundtruth/field_markings.h"
+#include "colorfree/groundtruth/matching.h"
+#include "colorfree/groundtruth/scoring_params.h"
+#include "colorfree/groundtruth/truth_in_image.h"
+#include "colorfree/perception/field_dimensions.h"
+#include "colorfree/perception/pipeline.h"
+#include "colorfree/sim/runner.h"
+#include "colorfree/sim/scenario.h"
+#include "colorfree/sim/world_renderer.h"
+
+using namespace colorfree;
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: ball_probe SCENARIO [frames_per_case] [case] [png_dir]\n");
+    return 2;
+  }
+  const int frames = argc > 2 ? std::atoi(argv[2]) : -1;
+  const int only_case = argc > 3 ? std::atoi(argv[3]) : -1;
+  const std::string png_dir = argc > 4 ? argv[4] : "";
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  const FieldMarkings markings = FieldMarkings::fromDimensions(dims);
+  const ScoringParams scoring = ScoringParams::loadDefault();
+  PipelineConfig config = PipelineConfig::loadDefault();
+  // Quick parameter trials: BP_TEXTURE=..., BP_SEARCH=..., BP_MINRESP=... override the files.
+  const auto env = [](const char* k, double& v) {
+    if (const char* e = std::getenv(k)) v = std::atof(e);
+  };
+  env("BP_TEXTURE", config.ball_proposer.texture_weight);
+  env("BP_SEARCH", config.ball_proposer.centre_search_fraction);
+  env("BP_MINGRAD", config.ball_proposer.min_gradient);
+  env("BP_RTOL", config.ball_proposer.radius_tolerance);
+  env("BP_MINRESP", config.ball_proposer.min_response);
+  env("BP_INNER", config.ball_proposer.inner_fraction);
+  env("BP_OUTER", config.ball_proposer.outer_fraction);
+  env("BP_TEXEXP", config.ball_proposer.texture_scale_exponent);
+  env("BP_BODY", config.ball_proposer.robot_body_factor);
+  env("BP_STEP", config.ball_proposer.step_fraction);
+  const Pipeline pipeline(config);
+  sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
+  int truths = 0, prop_hits = 0, hits = 0, fps = 0;
+  for (int c = 0; c < runner.caseCount(); ++c) {
+    if (only_case >= 0 && c != only_case) continue;
+    RobotTracks tracks;
+    runner.runCase(c, frames, true, [&](const sim::RenderedFrame& f) {
+      const FrameTruth truth = computeFrameTruth(f.truth, markings, dims, scoring);
+      Frame frame(f.image.view(), f.truth.camera.model);
+      pipeline.process(frame, nullptr, &tracks);
+      const BallInImage& b = truth.ball;
+      const bool demand = truth.ball_present && b.in_view && b.should_detect;
+      std::printf("case %d %s frame %d: ball %s c=(%.1f,%.1f) r=%.1f vis=%.2f d=%.2f%s\n", c,
+                  runner.scenarioCase(c).name().c_str(), f.frame_index, truth.ball_present && b.in_view ? "in view" : "out",
+                  b.centre_px.x(), b.centre_px.y(), b.radius_px, b.visible_fraction, b.distance_m,
+                  demand ? " DEMANDED" : "");
+      bool ph = false, dh = false;
+      const auto& props = *frame.ball_proposals;
+      for (std::size_t i = 0; i < props.size(); ++i) {
+        const auto& p = props[i];
+        const bool m = truth.ball_present && b.in_view && ballMatchCost(b, p.centre_px, scoring).has_value();
+        ph = ph || (m && demand);
+        float bc = -1, bn = -1;
+        if (frame.ball_decisions) {
+          for (const auto& d : *frame.ball_decisions) {
+            if (d.proposal == static_cast<int>(i)) bc = d.boost_confidence, bn = d.ball_confidence;
+          }
+        }
+        std::printf("   prop %2zu (%.1f,%.1f) r=%.1f resp=%.1f dist=%.1f%s boost=%.3f ball=%.3f\n", i, p.centre_px.x(),
+                    p.centre_px.y(), p.radius_px, p.response, (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", bc, bn);
+      }
+      for (const auto& bp : *frame.ball_percepts) {
+        const bool m = truth.ball_present && b.in_view && ballMatchCost(b, bp.centre_px, scoring).has_value();
+        if (m && demand) dh = true;
+        if (!m) ++fps;
+        std::printf("   PERCEPT (%.1f,%.1f) conf=%.3f %s\n", bp.centre_px.x(), bp.centre_px.y(), bp.confidence, m ? "TP" : "FP");
+      }
+      if (demand) {
+        ++truths;
+        prop_hits += ph;
+        hits += dh;
+        if (!ph) std::printf("   >>> PROPOSAL MISS\n");
+        else if (!dh) std::printf("   >>> NET MISS\n");
+      }
+      if (!png_dir.empty()) {
+        char name[256];
+        std::snprintf(name, sizeof name, "%s/c%02d_f%03d.png", png_dir.c_str(), c, f.frame_index);
+        writeGrayPng(name, f.image.view());
+      }
+    });
+  }
+  std::printf("truths %d proposal hits %d detected %d false positives %d\n", truths, prop_hits, hits, fps);
+  return 0;
+}
