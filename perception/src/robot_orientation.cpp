@@ -20,7 +20,10 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.variance_radius_px = static_cast<int>(f.getInRange("variance_radius_px", 1, 8));
   p.cns_sigma_gray = f.getInRange("cns_sigma_gray", 0.01, 255);
   p.cns_threshold = f.getInRange("cns_threshold", 0, 2);
+  p.silhouette_min_rows = static_cast<int>(f.getInRange("silhouette_min_rows", 1, 8));
+  p.silhouette_neighbour_rows_px = static_cast<int>(f.getInRange("silhouette_neighbour_rows_px", 0, 64));
   p.vote_distance_m = f.getInRange("vote_distance_m", 0.0001, 1);
+  p.vote_margin_m = f.getInRange("vote_margin_m", 0, 2);
   p.second_line_min_length_m = f.getInRange("second_line_min_length_m", 0, 2);
   p.second_line_max_length_m = f.getInRange("second_line_max_length_m", 0, 2);
   p.second_line_max_cos = f.getInRange("second_line_max_cos", 0, 1);
@@ -122,14 +125,14 @@ namespace {
 // Least-squares refit of a hull line to the silhouette points that voted for it (the hull's
 // vertices are the extreme, noisiest points); the ends are the extreme inliers.
 LineHypothesis refineLine(const LineHypothesis& line, const std::vector<Eigen::Vector2d>& points,
-                          double vote_distance) {
+                          double vote_distance, double vote_margin) {
   const Eigen::Vector2d u = line.direction();
   const Eigen::Vector2d n(-u.y(), u.x());
   const double len = line.length();
   std::vector<Eigen::Vector2d> in;
   for (const auto& q : points) {
     const double t = (q - line.a).dot(u);
-    if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -0.1 * len && t <= 1.1 * len) {
+    if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -vote_margin && t <= len + vote_margin) {
       in.push_back(q);
     }
   }
@@ -171,31 +174,50 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   if (cns.width < 3 || cns.height < 3) return out;
   const int half = p.median_width_px / 2;
   float window[9];
+  // Per scan line, the lowest row whose response passes (-1: none).
+  std::vector<int> hit;
   for (int x = cns.x0 + half; x < cns.x0 + cns.width - half; x += p.scan_step_px) {
+    int run = 0;  // rows in a row above the threshold: a real edge answers on several, noise on one
+    int found = -1;
     for (int y = cns.y0 + cns.height - 2; y > cns.y0; --y) {
       int n = 0;
       // Bright feet above the darker carpet: the vertical response is negative there.
       for (int dx = -half; dx <= half; ++dx) window[n++] = -cns.gyAt(x + dx, y);
       std::nth_element(window, window + n / 2, window + n);
-      if (window[n / 2] > p.cns_threshold) {
-        const Eigen::Vector2d pt(x + 0.5, y + 0.5);
-        if (const auto g = camera.pixelToGround(pt)) {
-          out.silhouette_px.push_back(pt);
-          out.silhouette_in_robot.push_back(*g);
-        }
+      run = window[n / 2] > p.cns_threshold ? run + 1 : 0;
+      if (run >= p.silhouette_min_rows) {
+        found = y + p.silhouette_min_rows - 1;  // the edge's lowest row that answered
         break;
       }
+    }
+    hit.push_back(found);
+  }
+  // A silhouette point continues on a neighbouring scan line; an isolated one is noise.
+  for (std::size_t i = 0; i < hit.size(); ++i) {
+    if (hit[i] < 0) continue;
+    const bool left = i > 0 && hit[i - 1] >= 0 && std::abs(hit[i - 1] - hit[i]) <= p.silhouette_neighbour_rows_px;
+    const bool right = i + 1 < hit.size() && hit[i + 1] >= 0 &&
+                       std::abs(hit[i + 1] - hit[i]) <= p.silhouette_neighbour_rows_px;
+    if (!left && !right) continue;
+    const Eigen::Vector2d pt(cns.x0 + half + static_cast<double>(i) * p.scan_step_px + 0.5, hit[i] + 0.5);
+    if (const auto g = camera.pixelToGround(pt)) {
+      out.silhouette_px.push_back(pt);
+      out.silhouette_in_robot.push_back(*g);
     }
   }
   SilhouetteLineBounds bounds;
   bounds.vote_distance = p.vote_distance_m;
+  bounds.vote_margin = p.vote_margin_m;
   bounds.min_length = p.second_line_min_length_m;
   bounds.max_length = p.second_line_max_length_m;
   bounds.max_orthogonality_cos = p.second_line_max_cos;
+  bounds.viewpoint = camera.position().head<2>();
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
-    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m);
+    // Twice: the hull edge's direction is rough, the first fit's much less so.
+    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m);
+    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, 0.0);
     const auto a = camera.robotToPixel({line->a.x(), line->a.y(), 0});
     const auto b = camera.robotToPixel({line->b.x(), line->b.y(), 0});
     if (!a || !b) continue;

@@ -32,9 +32,12 @@ struct RobotOrientationParams {
   int scan_step_px = 1;                      ///< between vertical scan lines
   int median_width_px = 3;                   ///< horizontal median filter over the CNS response
   int variance_radius_px = 2;                ///< CNS local variance window radius
-  double cns_sigma_gray = 20;                ///< CNS noise floor
+  double cns_sigma_gray = 40;                ///< CNS noise floor
   double cns_threshold = 0.5;                ///< minus the vertical CNS (bright above dark) above this is the silhouette
-  double vote_distance_m = 0.012;            ///< line voting
+  int silhouette_min_rows = 2;               ///< ... on this many rows in a row (noise answers on one)
+  int silhouette_neighbour_rows_px = 2;      ///< a point needs a neighbouring scan line's point this close
+  double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
+  double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
   double second_line_min_length_m = 0.04;
   double second_line_max_length_m = 0.25;
   double second_line_max_cos = 0.35;
