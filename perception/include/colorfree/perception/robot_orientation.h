@@ -35,7 +35,9 @@ struct RobotOrientationParams {
   double cns_sigma_gray = 40;                ///< CNS noise floor
   double cns_threshold = 0.5;                ///< minus the vertical CNS (bright above dark) above this is the silhouette
   int silhouette_min_rows = 2;               ///< ... on this many rows in a row (noise answers on one)
-  int silhouette_neighbour_rows_px = 2;      ///< a point needs a neighbouring scan line's point this close
+  int silhouette_neighbour_rows_px = 2;      ///< edge points on neighbouring scan lines this close chain
+  int silhouette_min_chain_px = 4;           ///< a silhouette point's chain spans at least this many scan lines ...
+  double silhouette_min_chain_fraction = 0.06;  ///< ... and this fraction of the robot box's width
   double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
   double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
   double second_line_min_length_m = 0.04;
