@@ -8,7 +8,9 @@
 #include "colorfree/perception/camera_model.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/image.h"
+#include "colorfree/perception/cnn/net.h"
 #include "colorfree/perception/pipeline.h"
+#include "colorfree/perception/robot_orientation.h"
 #include "commands.h"
 
 namespace colorfree::app {
@@ -166,7 +168,7 @@ cv::Point pt(const Eigen::Vector2d& v) {
   return {static_cast<int>(std::lround(v.x() - 0.5)), static_cast<int>(std::lround(v.y() - 0.5))};
 }
 
-void drawAnnotated(const std::string& path, const Frame& frame) {
+void drawAnnotated(const std::string& path, const Frame& frame, const PipelineConfig& config) {
   cv::Mat gray(frame.image.height, frame.image.width, CV_8UC1,
                const_cast<std::uint8_t*>(frame.image.data), static_cast<std::size_t>(frame.image.stride));
   cv::Mat img;
@@ -222,6 +224,32 @@ void drawAnnotated(const std::string& path, const Frame& frame) {
   if (frame.robot_proposals) {
     for (const auto& p : *frame.robot_proposals) {
       cv::rectangle(img, pt({p.box.x0, p.box.y0}), pt({p.box.x1, p.box.y1}), {255, 120, 0}, 1);
+    }
+  }
+  if (frame.robot_percepts && !frame.robot_percepts->empty()) {
+    // The orientation stage's inside: silhouette points (green), its lines (magenta) and their
+    // regions (yellow: usable, with OriNet's class F/B/S; grey: rejected).
+    const std::string dir = config.model_dir.empty() ? cnn::defaultModelDir() : config.model_dir;
+    auto net = [&](const char* stem) {
+      return cnn::Classifier::load(dir + "/" + stem + ".cfg", dir + "/" + stem + ".weights");
+    };
+    const RobotOrientationEstimator ori(config.robot_orientation, config.field, net("ori_boost_net"),
+                                        net("ori_net"));
+    for (const auto& r : *frame.robot_percepts) {
+      const RobotLines lines = ori.estimate(frame.image, frame.camera, r);
+      for (const auto& q : lines.silhouette_px) cv::circle(img, pt(q), 0, {0, 255, 0}, -1);
+      for (const auto& region : lines.regions) {
+        const auto a = frame.camera.robotToPixel({region.line_in_robot.a.x(), region.line_in_robot.a.y(), 0});
+        const auto b = frame.camera.robotToPixel({region.line_in_robot.b.x(), region.line_in_robot.b.y(), 0});
+        if (a && b) cv::line(img, pt(*a), pt(*b), {255, 0, 255}, 1);
+        const cv::Scalar colour = region.side ? cv::Scalar(0, 255, 255) : cv::Scalar(150, 150, 150);
+        cv::rectangle(img, pt({region.box.x0, region.box.y0}), pt({region.box.x1, region.box.y1}), colour, 1);
+        if (region.side) {
+          const char* names[] = {"F", "B", "S"};
+          cv::putText(img, names[static_cast<int>(*region.side)], pt({region.box.x0, region.box.y1 + 12}),
+                      cv::FONT_HERSHEY_SIMPLEX, 0.4, colour, 1);
+        }
+      }
     }
   }
   if (frame.robot_percepts) {
@@ -302,7 +330,7 @@ void addDetectCommand(CLI::App& app, int& exit_code) {
       printText(opt->image, frame, stats);
       printRobots(frame);
     }
-    if (!opt->out.empty()) drawAnnotated(opt->out, frame);
+    if (!opt->out.empty()) drawAnnotated(opt->out, frame, config);
     exit_code = 0;
   });
 }

@@ -9,6 +9,7 @@
 #include "colorfree/perception/pipeline.h"
 #include "colorfree/training/active_learning.h"
 #include "colorfree/training/ball_kind.h"
+#include "colorfree/training/robot_kind.h"
 #include "commands.h"
 
 namespace colorfree::app {
@@ -39,7 +40,7 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
-  cmd->add_option("OBJECT", o->object, "what to learn (ball)")->required();
+  cmd->add_option("OBJECT", o->object, "what to learn: ball, robot (RobotNet), ori_boost (OriBoostNet), ori (OriNet)")->required();
   cmd->add_option("--train", o->train, "training scenario files (new frames every round)")->required();
   cmd->add_option("--bootstrap", o->bootstrap, "scenario files without the object (hard negatives)");
   cmd->add_option("--validation", o->validation, "held-out scenario files (the accuracy figures)")->required();
@@ -57,7 +58,21 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--models", o->models, "model folder: cfgs read, weights written (default: perception/models)");
   cmd->add_flag("--quiet", o->quiet, "only the final summary");
   cmd->callback([o, &exit_code] {
-    if (o->object != "ball") throw Error("learn: unknown object '" + o->object + "' (known: ball)");
+    std::unique_ptr<training::ObjectKind> kind_ptr;
+    if (o->object == "ball") {
+      kind_ptr = std::make_unique<training::BallKind>(PipelineConfig::loadDefault(), ScoringParams::loadDefault());
+    } else if (o->object == "robot" || o->object == "ori_boost" || o->object == "ori") {
+      const auto which = o->object == "robot"       ? training::RobotNetChoice::kRobotNet
+                         : o->object == "ori_boost" ? training::RobotNetChoice::kOriBoostNet
+                                                    : training::RobotNetChoice::kOriNet;
+      if (which != training::RobotNetChoice::kRobotNet && !o->bootstrap.empty()) {
+        throw Error("learn: " + o->object + " has no hard negatives to bootstrap (leave out --bootstrap)");
+      }
+      kind_ptr = std::make_unique<training::RobotKind>(which, PipelineConfig::loadDefault(),
+                                                       ScoringParams::loadDefault());
+    } else {
+      throw Error("learn: unknown object '" + o->object + "' (known: ball, robot, ori_boost, ori)");
+    }
     if (o->frames < 1 || o->stride < 1 || o->rounds < 0 || o->bootstrap_rounds < 0 || o->epochs < 1) {
       throw Error("learn: --frames, --stride and --epochs must be positive, --rounds not negative");
     }
@@ -73,7 +88,7 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     config.trainer.max_epochs = o->epochs;
     config.trainer.patience_epochs = o->patience;
     config.trainer.seed = o->seed;
-    const training::BallKind kind(PipelineConfig::loadDefault(), ScoringParams::loadDefault());
+    const training::ObjectKind& kind = *kind_ptr;
     const auto result = training::learn(kind, config, [o](const std::string& line) {
       if (!o->quiet) std::printf("%s\n", line.c_str());
       std::fflush(stdout);

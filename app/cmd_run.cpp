@@ -91,7 +91,7 @@ void addRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--case", args->case_index, "Run only this case (0-based)");
   cmd->add_option("--frames", args->frames, "Frames per case instead of the scenario's count");
   cmd->add_flag("--save-frames", args->save_frames,
-                "Also write every frame as PNG under DIR/frames");
+                "Also write every frame as PNG under DIR/frames, with its camera file (.camera.yaml)");
   cmd->add_flag("--quiet", args->quiet, "No progress bar");
   cmd->add_option("--expect", args->expect,
                    "Check this expectation (\"metric >= value\") instead of the scenario's own; "
@@ -157,8 +157,12 @@ void addRunCommand(CLI::App& app, int& exit_code) {
           c, args->frames > 0 ? args->frames : -1, true, [&](const sim::RenderedFrame& f) {
             const FramePercepts percepts = perception.process(f, params);
             scorer.addFrame(f.truth, percepts, &f.image);
-            if (args->save_frames)
-              writeGrayPng(frame_dir + "/" + frameFile(f.frame_index), f.image.view());
+            if (args->save_frames) {
+              const std::string file = frame_dir + "/" + frameFile(f.frame_index);
+              writeGrayPng(file, f.image.view());
+              // The camera file beside it, for `colorfree detect FRAME --camera FRAME.camera.yaml`.
+              f.truth.camera.model.save(file.substr(0, file.size() - 4) + ".camera.yaml");
+            }
             bar.update(++done, total, info.name);
           });
     }

@@ -20,7 +20,12 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.variance_radius_px = static_cast<int>(f.getInRange("variance_radius_px", 1, 8));
   p.cns_sigma_gray = f.getInRange("cns_sigma_gray", 0.01, 255);
   p.cns_threshold = f.getInRange("cns_threshold", 0, 2);
+  p.silhouette_min_rows = static_cast<int>(f.getInRange("silhouette_min_rows", 1, 8));
+  p.silhouette_neighbour_rows_px = static_cast<int>(f.getInRange("silhouette_neighbour_rows_px", 0, 64));
+  p.silhouette_min_chain_px = static_cast<int>(f.getInRange("silhouette_min_chain_px", 1, 640));
+  p.silhouette_min_chain_fraction = f.getInRange("silhouette_min_chain_fraction", 0, 1);
   p.vote_distance_m = f.getInRange("vote_distance_m", 0.0001, 1);
+  p.vote_margin_m = f.getInRange("vote_margin_m", 0, 2);
   p.second_line_min_length_m = f.getInRange("second_line_min_length_m", 0, 2);
   p.second_line_max_length_m = f.getInRange("second_line_max_length_m", 0, 2);
   p.second_line_max_cos = f.getInRange("second_line_max_cos", 0, 1);
@@ -122,14 +127,14 @@ namespace {
 // Least-squares refit of a hull line to the silhouette points that voted for it (the hull's
 // vertices are the extreme, noisiest points); the ends are the extreme inliers.
 LineHypothesis refineLine(const LineHypothesis& line, const std::vector<Eigen::Vector2d>& points,
-                          double vote_distance) {
+                          double vote_distance, double vote_margin) {
   const Eigen::Vector2d u = line.direction();
   const Eigen::Vector2d n(-u.y(), u.x());
   const double len = line.length();
   std::vector<Eigen::Vector2d> in;
   for (const auto& q : points) {
     const double t = (q - line.a).dot(u);
-    if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -0.1 * len && t <= 1.1 * len) {
+    if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -vote_margin && t <= len + vote_margin) {
       in.push_back(q);
     }
   }
@@ -171,31 +176,75 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   if (cns.width < 3 || cns.height < 3) return out;
   const int half = p.median_width_px / 2;
   float window[9];
-  for (int x = cns.x0 + half; x < cns.x0 + cns.width - half; x += p.scan_step_px) {
-    for (int y = cns.y0 + cns.height - 2; y > cns.y0; --y) {
+  // Per scan line, the edges from the bottom up (the lowest row of each run of rows above the
+  // threshold; a real edge answers on several rows, noise on one), at most kMaxHits.
+  constexpr int kMaxHits = 4;
+  struct Hit {
+    int column, row;
+  };
+  std::vector<Hit> hits;
+  std::vector<int> first_hit;  // per scan line, its first entry in `hits`
+  int columns = 0;
+  for (int x = cns.x0 + half; x < cns.x0 + cns.width - half; x += p.scan_step_px, ++columns) {
+    first_hit.push_back(static_cast<int>(hits.size()));
+    int run = 0, found = 0;
+    for (int y = cns.y0 + cns.height - 2; y > cns.y0 && found < kMaxHits; --y) {
       int n = 0;
       // Bright feet above the darker carpet: the vertical response is negative there.
       for (int dx = -half; dx <= half; ++dx) window[n++] = -cns.gyAt(x + dx, y);
       std::nth_element(window, window + n / 2, window + n);
-      if (window[n / 2] > p.cns_threshold) {
-        const Eigen::Vector2d pt(x + 0.5, y + 0.5);
-        if (const auto g = camera.pixelToGround(pt)) {
-          out.silhouette_px.push_back(pt);
-          out.silhouette_in_robot.push_back(*g);
-        }
-        break;
+      run = window[n / 2] > p.cns_threshold ? run + 1 : 0;
+      if (run == p.silhouette_min_rows) {
+        hits.push_back({columns, y + p.silhouette_min_rows - 1});
+        ++found;
       }
+    }
+  }
+  first_hit.push_back(static_cast<int>(hits.size()));
+  // Chains: hits on neighbouring scan lines within a few rows. The feet's edges make long chains,
+  // the carpet's texture short ones.
+  std::vector<int> parent(hits.size());
+  for (std::size_t i = 0; i < hits.size(); ++i) parent[i] = static_cast<int>(i);
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (int c = 0; c + 1 < columns; ++c) {
+    for (int i = first_hit[c]; i < first_hit[c + 1]; ++i) {
+      for (int j = first_hit[c + 1]; j < first_hit[c + 2]; ++j) {
+        if (std::abs(hits[i].row - hits[j].row) <= p.silhouette_neighbour_rows_px) parent[root(i)] = root(j);
+      }
+    }
+  }
+  std::vector<int> chain_columns(hits.size(), 0);
+  for (std::size_t i = 0; i < hits.size(); ++i) ++chain_columns[root(static_cast<int>(i))];
+  const double min_chain = std::max<double>(p.silhouette_min_chain_px,
+                                            p.silhouette_min_chain_fraction * robot.box.width() / p.scan_step_px);
+  // Per scan line, the lowest hit on a long chain is the lower silhouette.
+  for (int c = 0; c < columns; ++c) {
+    for (int i = first_hit[c]; i < first_hit[c + 1]; ++i) {
+      if (chain_columns[root(i)] < min_chain) continue;
+      const Eigen::Vector2d pt(cns.x0 + half + static_cast<double>(c) * p.scan_step_px + 0.5, hits[i].row + 0.5);
+      if (const auto g = camera.pixelToGround(pt)) {
+        out.silhouette_px.push_back(pt);
+        out.silhouette_in_robot.push_back(*g);
+      }
+      break;
     }
   }
   SilhouetteLineBounds bounds;
   bounds.vote_distance = p.vote_distance_m;
+  bounds.vote_margin = p.vote_margin_m;
   bounds.min_length = p.second_line_min_length_m;
   bounds.max_length = p.second_line_max_length_m;
   bounds.max_orthogonality_cos = p.second_line_max_cos;
+  bounds.viewpoint = camera.position().head<2>();
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
-    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m);
+    // Twice: the hull edge's direction is rough, the first fit's much less so.
+    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m);
+    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, 0.0);
     const auto a = camera.robotToPixel({line->a.x(), line->a.y(), 0});
     const auto b = camera.robotToPixel({line->b.x(), line->b.y(), 0});
     if (!a || !b) continue;

@@ -67,6 +67,36 @@ TEST(SilhouetteLines, NoSecondLineWhenNothingIsOrthogonal) {
   EXPECT_FALSE(lines.second);
 }
 
+TEST(SilhouetteLines, WithAViewpointOnlyTheNearEdgesCount) {
+  // A turned foot seen from the origin: two near edges from the corner (1, 0), 0.16 m at +40°
+  // and 0.10 m at -50°, and a few points far behind them (the heel's top, seen through). The
+  // hull edges behind the silhouette must not be candidates.
+  std::vector<Eigen::Vector2d> pts;
+  const Eigen::Vector2d corner(1.0, 0.0), u(std::cos(deg(40)), std::sin(deg(40))),
+      v(std::cos(deg(-50)), std::sin(deg(-50)));
+  for (int i = 0; i <= 32; ++i) pts.push_back(corner + i * 0.005 * u);
+  for (int i = 1; i <= 20; ++i) pts.push_back(corner + i * 0.005 * v);
+  for (int i = 0; i <= 12; ++i) pts.push_back(corner + 0.16 * u + 0.10 * v + Eigen::Vector2d(0.0, -0.005 * i));
+  SilhouetteLineBounds bounds;
+  bounds.vote_distance = 0.003;
+  bounds.min_length = 0.04;
+  bounds.vote_margin = 1.0;  // the whole line votes (the hull splits a noisy edge into pieces)
+  bounds.viewpoint = Eigen::Vector2d::Zero();
+  const auto lines = findSilhouetteLines(pts, bounds);
+  ASSERT_TRUE(lines.first);
+  EXPECT_NEAR(std::abs(lines.first->direction().dot(u)), 1.0, 1e-9);
+  EXPECT_EQ(lines.first->votes, 33);
+  EXPECT_NEAR(lines.first->length(), 0.16, 1e-9);
+  ASSERT_TRUE(lines.second);
+  EXPECT_NEAR(std::abs(lines.second->direction().dot(v)), 1.0, 1e-9);
+  EXPECT_NEAR(lines.second->length(), 0.10, 1e-9);
+  // Seen from behind, the far points' edge is the near one.
+  bounds.viewpoint = Eigen::Vector2d(3.0, 0.0);
+  const auto behind = findSilhouetteLines(pts, bounds);
+  ASSERT_TRUE(behind.first);
+  EXPECT_LT(std::abs(behind.first->direction().dot(u)), 0.9);
+}
+
 TEST(CircularMedian, WrapsAroundPlusMinusPi) {
   // Samples around 180°: a linear median would give about 0.
   const std::vector<double> a = {deg(170), deg(-175), deg(178), deg(-170), deg(175)};

@@ -63,9 +63,35 @@ SilhouetteLines findSilhouetteLines(const std::vector<Eigen::Vector2d>& points,
     LineHypothesis h;
     h.a = hull[i];
     h.b = hull[(i + 1) % hull.size()];
-    h.votes = countLineVotes(h.a, h.b, points, bounds.vote_distance);
+    if (bounds.viewpoint && hull.size() > 2) {
+      // Counter-clockwise hull: the outward normal of a -> b is (dy, -dx).
+      const Eigen::Vector2d d = h.b - h.a;
+      const Eigen::Vector2d outward(d.y(), -d.x());
+      if (outward.dot(*bounds.viewpoint - 0.5 * (h.a + h.b)) <= 0) continue;
+    }
+    h.votes = countLineVotes(h.a, h.b, points, bounds.vote_distance, bounds.vote_margin);
+    // The line's extent is that of its voters (a noisy edge's hull splits it into short pieces).
+    const Eigen::Vector2d d = h.b - h.a;
+    const double length = d.norm();
+    if (length > 0) {
+      const Eigen::Vector2d u = d / length;
+      double t0 = 0, t1 = length;
+      for (const auto& p : points) {
+        const Eigen::Vector2d ap = p - h.a;
+        const double along = ap.dot(u);
+        if (std::abs(ap.x() * u.y() - ap.y() * u.x()) <= bounds.vote_distance && along >= -bounds.vote_margin &&
+            along <= length + bounds.vote_margin) {
+          t0 = std::min(t0, along);
+          t1 = std::max(t1, along);
+        }
+      }
+      const Eigen::Vector2d a = h.a;
+      h.a = a + t0 * u;
+      h.b = a + t1 * u;
+    }
     candidates.push_back(h);
   }
+  if (candidates.empty()) return out;
   // Most votes first; ties go to the longer line, then to hull order (stable).
   std::stable_sort(candidates.begin(), candidates.end(), [](const auto& p, const auto& q) {
     return p.votes > q.votes || (p.votes == q.votes && p.length() > q.length());

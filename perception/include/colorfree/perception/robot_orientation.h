@@ -32,9 +32,14 @@ struct RobotOrientationParams {
   int scan_step_px = 1;                      ///< between vertical scan lines
   int median_width_px = 3;                   ///< horizontal median filter over the CNS response
   int variance_radius_px = 2;                ///< CNS local variance window radius
-  double cns_sigma_gray = 20;                ///< CNS noise floor
+  double cns_sigma_gray = 40;                ///< CNS noise floor
   double cns_threshold = 0.5;                ///< minus the vertical CNS (bright above dark) above this is the silhouette
-  double vote_distance_m = 0.012;            ///< line voting
+  int silhouette_min_rows = 2;               ///< ... on this many rows in a row (noise answers on one)
+  int silhouette_neighbour_rows_px = 2;      ///< edge points on neighbouring scan lines this close chain
+  int silhouette_min_chain_px = 4;           ///< a silhouette point's chain spans at least this many scan lines ...
+  double silhouette_min_chain_fraction = 0.06;  ///< ... and this fraction of the robot box's width
+  double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
+  double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
   double second_line_min_length_m = 0.04;
   double second_line_max_length_m = 0.25;
   double second_line_max_cos = 0.35;

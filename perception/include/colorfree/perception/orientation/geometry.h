@@ -35,12 +35,19 @@ struct SilhouetteLineBounds {
   double min_length = 0.05;        ///< second line: shortest accepted
   double max_length = 0.30;        ///< second line: longest accepted
   double max_orthogonality_cos = 0.35;  ///< second line: |cos| of its angle to the first, at most
+  double vote_margin = 0;          ///< a point votes when its projection is within this of the edge's ends
+  /// Where the silhouette is seen from (the camera's ground point, e.g. the robot frame's
+  /// origin). When set, only the hull edges facing it are candidates: the lower silhouette is
+  /// the near side of the hull, the edge closing the hull behind it is no edge of the robot.
+  std::optional<Eigen::Vector2d> viewpoint;
 };
 
 /// The paper's lines generator on silhouette points: every pair of consecutive hull vertices is a
-/// candidate, validated by voting over all points; the best is the first line; the second is the
+/// candidate, validated by voting over all points (its ends are moved to its outermost voters);
+/// the best is the first line; the second is the
 /// best-voted remaining candidate that meets the length bounds and is roughly orthogonal to it.
-/// Empty when there are fewer than two hull vertices.
+/// With a viewpoint only edges facing it count. Empty when there are fewer than two hull vertices
+/// (or no edge faces the viewpoint).
 struct SilhouetteLines {
   std::optional<LineHypothesis> first;
   std::optional<LineHypothesis> second;

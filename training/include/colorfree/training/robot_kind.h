@@ -1,0 +1,62 @@
+#pragma once
+
+#include <cstdint>
+
+#include "colorfree/groundtruth/scoring_params.h"
+#include "colorfree/perception/pipeline.h"
+#include "colorfree/perception/robot_orientation.h"
+#include "colorfree/perception/robot_proposer.h"
+#include "colorfree/training/active_learning.h"
+
+namespace colorfree::training {
+
+/// Which of the robot nets a RobotKind teaches.
+enum class RobotNetChoice {
+  kRobotNet,     ///< RobotNet: the real RobotProposer's boxes, robot or none
+  kOriBoostNet,  ///< OriBoostNet: the lines generator's regions, usable line or not
+  kOriNet,       ///< OriNet: usable regions, front, back or side of the robot
+};
+
+/// Labelling rules for the robot kinds (angles between a line and the true heading's axis or its
+/// normal, whichever is nearer).
+struct RobotLabelRules {
+  double usable_max_deg = 9;      ///< a line this close to the axis or the normal is usable
+  double unusable_min_deg = 16;   ///< this far from both, unusable; in between left out
+  int random_negatives = 2;       ///< RobotNet: robot-sized boxes at random ground points per frame
+};
+
+/// The robot-specific part of the loop. Proposals come from the real RobotProposer (after the
+/// real ignore-region and high-contrast stages); a proposal is a robot when the scorer's matching
+/// rule pairs it with a robot that should be detected, none when it pairs with no robot. The
+/// orientation kinds run the real lines generator on the proposals that are robots and label its
+/// regions from the true heading. Random negatives are drawn from a generator seeded by the
+/// frame's pixels, so the same frame gives the same samples.
+class RobotKind : public ObjectKind {
+ public:
+  RobotKind(RobotNetChoice which, PipelineConfig pipeline, ScoringParams scoring,
+            RobotLabelRules rules = {});
+  std::string name() const override;
+  std::vector<std::string> classNames() const override;
+  std::vector<std::string> netStems() const override;
+  /// RobotNet: robot (1) and none (0). The orientation nets have no object-free scenes to
+  /// bootstrap on; their labels here are usable/unusable and front/side.
+  int positiveLabel() const override { return 1; }
+  int negativeLabel() const override { return which_ == RobotNetChoice::kOriNet ? 2 : 0; }
+  std::vector<Candidate> proposals(const GrayImage& image, const CameraModel& camera,
+                                   const FrameTruth& truth) const override;
+  /// RobotNet: a proposal-shaped box above every true robot's ground point. The orientation
+  /// kinds: none (their regions only exist where the lines generator puts them).
+  std::vector<Candidate> truthSamples(const GrayImage& image, const CameraModel& camera,
+                                      const FrameTruth& truth) const override;
+
+ private:
+  RobotNetChoice which_;
+  PipelineConfig config_;
+  Pipeline pipeline_;  ///< the early stages only (robot and ball stages off)
+  RobotProposer proposer_;
+  RobotOrientationEstimator lines_;  ///< only its lines generator is used (untrained nets)
+  ScoringParams scoring_;
+  RobotLabelRules rules_;
+};
+
+}  // namespace colorfree::training
