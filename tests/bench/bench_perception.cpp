@@ -1,13 +1,9 @@
 // Perception stages per 640×480 frame on a varied set of synthetic field frames (poses, light
 // gradients, noise). Run pinned to one core: `taskset -c 0 build/bin/bench_perception`.
-// After Google Benchmark's own table, a summary per stage: median, mean and max over the frames
-// (the paper's profiling table reports mean and max) of each frame's CPU time; with
-// --benchmark_repetitions=N a frame counts with its fastest repetition.
+// After Google Benchmark's own table, a summary per stage (bench_perception_summary.h).
+// bench_perception_rendered does the same on frames the simulator renders.
 #include <benchmark/benchmark.h>
 
-#include <algorithm>
-#include <cstdio>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,6 +12,7 @@
 #include "colorfree/perception/high_contrast.h"
 #include "colorfree/perception/ignore_regions.h"
 #include "colorfree/perception/pipeline.h"
+#include "bench_perception_summary.h"
 #include "synthetic_field.h"
 
 namespace colorfree {
@@ -108,39 +105,6 @@ void bmPipeline(benchmark::State& state, int i) {
   }
 }
 
-// Collects each run's time per iteration, by stage, for the summary.
-class SummaryReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      if (r.run_type != Run::RT_Iteration || r.iterations == 0) continue;
-      const std::string name = r.run_name.function_name;
-      // CPU time of the one thread, in the run's unit (µs) → ms; with repetitions the least
-      // disturbed one (the machine is shared).
-      const double ms = r.GetAdjustedCPUTime() * 1e-3;
-      auto [it, added] = per_frame_ms_.emplace(name, ms);
-      if (!added) it->second = std::min(it->second, ms);
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-  void printSummary() const {
-    std::map<std::string, std::vector<double>> times_ms_;
-    for (const auto& [name, ms] : per_frame_ms_) times_ms_[name.substr(0, name.find('/'))].push_back(ms);
-    std::printf("\nCPU time per 640x480 frame over %zu synthetic frames (ms):\n", frames().size());
-    std::printf("%-16s %9s %9s %9s\n", "stage", "median", "mean", "max");
-    for (auto [stage, t] : times_ms_) {
-      std::sort(t.begin(), t.end());
-      double sum = 0;
-      for (double v : t) sum += v;
-      const double median = t.size() % 2 ? t[t.size() / 2] : (t[t.size() / 2 - 1] + t[t.size() / 2]) / 2;
-      std::printf("%-16s %9.4f %9.4f %9.4f\n", stage.c_str(), median, sum / t.size(), t.back());
-    }
-  }
-
- private:
-  std::map<std::string, double> per_frame_ms_;
-};
-
 }  // namespace
 }  // namespace colorfree
 
@@ -155,9 +119,9 @@ int main(int argc, char** argv) {
   }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  SummaryReporter reporter;
+  bench::StageSummaryReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  reporter.printSummary();
+  reporter.printSummary((std::to_string(frames().size()) + " synthetic frames").c_str());
   benchmark::Shutdown();
   return 0;
 }

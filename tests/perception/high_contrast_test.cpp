@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "colorfree/perception/error.h"
 #include "synthetic_field.h"
@@ -121,6 +124,146 @@ TEST(HighContrast, ContrastThresholdDecides) {
   EXPECT_FALSE(r.seeds[10 * r.columns + 10]);
   EXPECT_TRUE(r.seeds[10 * r.columns + 20]);
   EXPECT_NEAR(r.contrast[10 * r.columns + 20], 25, 1e-4);
+}
+
+}  // namespace
+}  // namespace colorfree
+
+namespace colorfree {
+namespace {
+
+// The detector as the paper describes it, one window at a time with no shortcuts: the window's
+// samples (every row_step-th row), their variance as the pre-test, a 32-bin histogram, Otsu,
+// dilation, 8-connected regions. The fast detector must give the same windows, contrasts and
+// regions (the ball and robot proposals read its mask).
+ContrastRegions referenceContrast(const GrayView& image, const IgnoreMask& ignore, const HighContrastParams& p) {
+  const int s = p.window_px;
+  ContrastRegions out;
+  out.window_px = s;
+  out.columns = image.width / s;
+  out.rows = image.height / s;
+  const std::size_t n = static_cast<std::size_t>(out.columns) * out.rows;
+  out.seeds.assign(n, 0);
+  out.mask.assign(n, 0);
+  out.contrast.assign(n, 0.f);
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.columns; ++c) {
+      if (!ignore.looked(c * s + s / 2, r * s + s / 2)) continue;
+      std::vector<int> samples;
+      for (int y = r * s; y < (r + 1) * s; y += p.row_step_px) {
+        for (int x = c * s; x < (c + 1) * s; ++x) samples.push_back(image.at(x, y));
+      }
+      double sum = 0, sq = 0;
+      for (int v : samples) sum += v, sq += v * v;
+      const double mean = sum / samples.size();
+      if (sq / samples.size() - mean * mean < p.min_contrast * p.min_contrast) continue;
+      std::uint32_t count[32] = {}, value_sum[32] = {};
+      for (int v : samples) ++count[v / 8], value_sum[v / 8] += v;
+      const OtsuResult o = otsuBinned(count, value_sum, 32);
+      out.contrast[r * out.columns + c] = static_cast<float>(o.between_std);
+      out.seeds[r * out.columns + c] = o.between_std >= p.min_contrast;
+    }
+  }
+  const int d = p.dilation_windows;
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.columns; ++c) {
+      for (int rr = r - d; rr <= r + d; ++rr) {
+        for (int cc = c - d; cc <= c + d; ++cc) {
+          if (rr >= 0 && cc >= 0 && rr < out.rows && cc < out.columns && out.seeds[rr * out.columns + cc]) {
+            out.mask[r * out.columns + c] = 1;
+          }
+        }
+      }
+    }
+  }
+  // Regions by repeated relabelling to the smallest label among 8 neighbours, numbered in the
+  // order of their first window (row-major).
+  std::vector<int> label(n, -1);
+  for (std::size_t i = 0; i < n; ++i) label[i] = out.mask[i] ? static_cast<int>(i) : -1;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int r = 0; r < out.rows; ++r) {
+      for (int c = 0; c < out.columns; ++c) {
+        int& l = label[r * out.columns + c];
+        if (l < 0) continue;
+        for (int rr = std::max(0, r - 1); rr <= std::min(out.rows - 1, r + 1); ++rr) {
+          for (int cc = std::max(0, c - 1); cc <= std::min(out.columns - 1, c + 1); ++cc) {
+            const int other = label[rr * out.columns + cc];
+            if (other >= 0 && other < l) l = other, changed = true;
+          }
+        }
+      }
+    }
+  }
+  std::vector<int> firsts;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (label[i] == static_cast<int>(i)) firsts.push_back(static_cast<int>(i));
+  }
+  for (int first : firsts) {
+    ContrastRegion region;
+    int c0 = out.columns, c1 = -1, r0 = out.rows, r1 = -1;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (label[i] != first) continue;
+      ++region.window_count;
+      const int r = static_cast<int>(i) / out.columns, c = static_cast<int>(i) % out.columns;
+      c0 = std::min(c0, c), c1 = std::max(c1, c), r0 = std::min(r0, r), r1 = std::max(r1, r);
+    }
+    region.box = {double(c0 * s), double(r0 * s), double((c1 + 1) * s), double((r1 + 1) * s)};
+    out.regions.push_back(region);
+  }
+  return out;
+}
+
+void expectSameRegions(const ContrastRegions& a, const ContrastRegions& b, const std::string& what) {
+  ASSERT_EQ(a.columns, b.columns) << what;
+  ASSERT_EQ(a.rows, b.rows) << what;
+  EXPECT_EQ(a.seeds, b.seeds) << what;
+  EXPECT_EQ(a.mask, b.mask) << what;
+  EXPECT_EQ(a.contrast, b.contrast) << what;
+  ASSERT_EQ(a.regions.size(), b.regions.size()) << what;
+  for (std::size_t i = 0; i < a.regions.size(); ++i) {
+    EXPECT_EQ(a.regions[i].window_count, b.regions[i].window_count) << what << " region " << i;
+    EXPECT_EQ(a.regions[i].box.x0, b.regions[i].box.x0) << what << " region " << i;
+    EXPECT_EQ(a.regions[i].box.y0, b.regions[i].box.y0) << what << " region " << i;
+    EXPECT_EQ(a.regions[i].box.x1, b.regions[i].box.x1) << what << " region " << i;
+    EXPECT_EQ(a.regions[i].box.y1, b.regions[i].box.y1) << what << " region " << i;
+  }
+}
+
+TEST(HighContrast, SameAsTheStraightforwardDetector) {
+  // Field frames with lines, noise and gradients; blobs on noise; odd window sizes and steps;
+  // a field boundary and a body cut-out.
+  std::vector<std::pair<std::string, GrayImage>> images;
+  for (int i = 0; i < 3; ++i) {
+    test::SyntheticScene scene = test::sceneFromField(FieldDimensions{}, {-2.0 + 1.7 * i, 0.4 * i, 0.5 * i});
+    scene.pixel_noise = 4 + 6 * i;
+    scene.gradient = 0.3 * i;
+    scene.seed = 20 + i;
+    images.emplace_back("field " + std::to_string(i), test::renderScene(test::testCamera(18 + 4 * i), scene));
+  }
+  GrayImage blobs = test::noiseImage(640, 480, 90, 20, 7);
+  for (int k = 0; k < 12; ++k) drawBlob(blobs, 30 + 50 * k, 40 + 35 * k, 6 + k);
+  images.emplace_back("blobs", std::move(blobs));
+  IgnoreMask cut = IgnoreMask::all(640, 480);
+  for (int x = 0; x < 640; ++x) {
+    cut.top_y[x] = 60 + x / 8;
+    cut.bottom_y[x] = x > 200 && x < 420 ? 400 : 480;
+  }
+  std::vector<HighContrastParams> params(5);
+  params[1].row_step_px = 1;
+  params[2].window_px = 20, params[2].row_step_px = 3, params[2].dilation_windows = 2;
+  params[3].window_px = 13, params[3].min_contrast = 10, params[3].dilation_windows = 0;
+  params[4].window_px = 64, params[4].row_step_px = 1, params[4].min_contrast = 5;
+  for (const auto& [name, image] : images) {
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      for (bool with_cut : {true, false}) {
+        const IgnoreMask m = with_cut ? cut : IgnoreMask::all(640, 480);
+        expectSameRegions(HighContrastDetector(params[k]).run(image.view(), m),
+                          referenceContrast(image.view(), m, params[k]),
+                          name + " params " + std::to_string(k) + (with_cut ? " cut" : ""));
+      }
+    }
+  }
 }
 
 }  // namespace

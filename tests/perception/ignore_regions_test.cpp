@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "colorfree/perception/error.h"
 #include "synthetic_field.h"
 
@@ -62,6 +65,33 @@ CameraModel bottomCamera(double pitch_deg) {
   pose.height_m = 0.47;
   pose.pitch_rad = pitch_deg * 3.14159265358979323846 / 180;
   return CameraModel(CameraIntrinsics::fromHorizontalFov(320, 240, 60.9 * 3.14159265358979323846 / 180), pose);
+}
+
+TEST(FieldBoundary, BlockStatsAreTheSamplesMeanAndSpread) {
+  // Every or every other pixel and row, blocks of 16 and 32 pixels (summed 16 at a time) and
+  // others (summed one by one), against the samples' mean and standard deviation.
+  const GrayImage image = test::noiseImage(640, 480, 120, 60, 11);
+  for (int step : {1, 2, 3}) {
+    for (int bw : {8, 16, 32, 24}) {
+      for (int x0 : {0, 16, 7, 601}) {
+        const int y0 = 3 + x0 % 50, x1 = std::min(640, x0 + bw), y1 = y0 + 8;
+        double sum = 0, sq = 0;
+        int n = 0;
+        for (int y = y0; y < y1; y += step) {
+          for (int x = x0; x < x1; x += step) sum += image.at(x, y), sq += image.at(x, y) * image.at(x, y), ++n;
+        }
+        const double mean = sum / n;
+        const BlockStats s = blockStats(image.view(), x0, y0, x1, y1, step);
+        EXPECT_EQ(s.mean, static_cast<float>(mean)) << step << " " << bw << " " << x0;
+        EXPECT_EQ(s.spread, static_cast<float>(std::sqrt(std::max(0.0, sq / n - mean * mean))))
+            << step << " " << bw << " " << x0;
+      }
+    }
+  }
+  const GrayImage white(64, 64, 255);
+  EXPECT_EQ(blockStats(white.view(), 0, 0, 64, 64, 1).mean, 255.f);
+  EXPECT_EQ(blockStats(white.view(), 0, 0, 64, 64, 2).spread, 0.f);
+  EXPECT_EQ(blockStats(white.view(), 5, 5, 5, 9, 2).mean, 0.f);
 }
 
 TEST(BodyContour, BottomCameraSeesTheFeet) {

@@ -36,6 +36,15 @@ struct FieldBoundaryParams {
   static FieldBoundaryParams loadDefault();
 };
 
+/// Mean and standard deviation (gray levels) of the pixels (x, y), x0 <= x < x1, y0 <= y < y1,
+/// taking every `step`-th row and column from (x0, y0); zero when there are none. Exposed for the
+/// tests (the detector's blocks are summed 16 pixels at a time).
+struct BlockStats {
+  float mean = 0;
+  float spread = 0;
+};
+BlockStats blockStats(const GrayView& image, int x0, int y0, int x1, int y1, int step);
+
 /// Where the field ends towards the top of the image, per image column.
 struct FieldBoundary {
   std::vector<int> horizon_y;   ///< first row below the horizon, clamped to [0, height]
