@@ -39,7 +39,7 @@ struct BallProposerParams {
   /// brightest opposite pair (a line lights one pair, as does the ball on it), at least
   /// line_min_response; slots they do not fill go to the others.
   int line_count = 3;
-  double line_min_response = 20.0;
+  double line_min_response = 40.0;
   /// Robots' feet: a region this many ball diameters wide and deep around the feet point is
   /// scanned too (when robot percepts exist), and its responses are multiplied by feet_boost.
   double feet_region_diameters = 3.0;
