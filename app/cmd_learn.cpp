@@ -31,7 +31,7 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
       "the proposals from the truth, add them to a dataset folder, retrain; then bootstrap hard negatives");
   struct Options {
     std::string object = "ball";
-    std::vector<std::string> train, bootstrap, validation;
+    std::vector<std::string> train, bootstrap, validation, test;
     int frames = 8, stride = 4, rounds = 3, bootstrap_rounds = 1, epochs = 40, patience = 8;
     float bootstrap_confidence = 0.5f;
     std::uint64_t seed = 1;
@@ -43,7 +43,9 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("OBJECT", o->object, "what to learn: ball, robot (RobotNet), ori_boost (OriBoostNet), ori (OriNet)")->required();
   cmd->add_option("--train", o->train, "training scenario files (new frames every round)")->required();
   cmd->add_option("--bootstrap", o->bootstrap, "scenario files without the object (hard negatives)");
-  cmd->add_option("--validation", o->validation, "held-out scenario files (the accuracy figures)")->required();
+  cmd->add_option("--validation", o->validation, "held-out scenario files (early stopping)")->required();
+  cmd->add_option("--test", o->test,
+                  "test scenario files: only the final accuracy (written to DATASET/test/<net> for cnn-table --data)");
   cmd->add_option("--frames", o->frames, "frames per case and round")->capture_default_str();
   cmd->add_option("--stride", o->stride, "frame stride within a case")->capture_default_str();
   cmd->add_option("--rounds", o->rounds, "active rounds after the truth-cut round")->capture_default_str();
@@ -80,6 +82,7 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     config.train = sources(o->train, o->frames, o->stride);
     config.bootstrap = sources(o->bootstrap, o->frames, o->stride);
     config.validation = sources(o->validation, o->frames, o->stride);
+    config.test = sources(o->test, o->frames, o->stride);
     config.rounds = o->rounds;
     config.bootstrap_rounds = o->bootstrap_rounds;
     config.bootstrap_min_confidence = o->bootstrap_confidence;
@@ -98,6 +101,10 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     for (std::size_t i = 0; i < stems.size(); ++i) {
       std::printf("%s: held-out accuracy %.4f on %d samples, %d training samples\n", stems[i].c_str(),
                   last.validation_accuracy[i], last.validation_samples[i], last.dataset_size[i]);
+    }
+    for (std::size_t i = 0; i < result.test_accuracy.size(); ++i) {
+      std::printf("%s: test accuracy %.4f on %d samples (test scenarios: neither trained on nor early stopping)\n",
+                  stems[i].c_str(), result.test_accuracy[i], result.test_samples[i]);
     }
     for (const auto& w : result.weights_written) std::printf("wrote %s\n", w.c_str());
     exit_code = 0;

@@ -117,10 +117,24 @@ class Integral {
 // Centre mean minus, over the four pairs of opposite surround cells, the brightest pair's darker
 // cell (a line or a crossing through the centre lights both cells of a pair; a robot's foot or a
 // line beside the ball only one), plus the print term: the spread of the centre's four quadrants.
-float response(const Integral& ii, const Integral& ei, int x, int y, double r, const BallProposerParams& p,
+// The filter's sizes at one expected radius (the same along a scan row).
+struct Scale {
+  int a, b;            // centre and surround box half-sides, pixels
+  float texture_gain;  // texture_weight × (r / reference) ^ exponent
+};
+
+Scale scaleAt(double r, const BallProposerParams& p) {
+  Scale s;
+  s.a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
+  s.b = std::max(s.a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
+  s.texture_gain = static_cast<float>(p.texture_weight *
+                                      std::pow(r / p.texture_reference_radius_px, p.texture_scale_exponent));
+  return s;
+}
+
+float response(const Integral& ii, const Integral& ei, int x, int y, const Scale& sc, const BallProposerParams& p,
                float* on_line = nullptr) {
-  const int a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
-  const int b = std::max(a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
+  const int a = sc.a, b = sc.b;
   const int xs[4] = {ii.clampX(x - b), ii.clampX(x - a), ii.clampX(x + a), ii.clampX(x + b)};
   const int ys[4] = {ii.clampY(y - b), ii.clampY(y - a), ii.clampY(y + a), ii.clampY(y + b)};
   std::uint32_t v[4][4];
@@ -165,11 +179,10 @@ float response(const Integral& ii, const Integral& ei, int x, int y, double r, c
   const float ring = static_cast<float>(outer_sum - inner_sum) / static_cast<float>(ring_area);
   surround = std::max(surround, ring);
   float dog = mean[1][1] - surround;
-  if (p.texture_weight > 0) {
-    const float texture = ei.mean(xs[1], ys[1], xs[2], ys[2]) *
-                          static_cast<float>(std::pow(r / p.texture_reference_radius_px, p.texture_scale_exponent));
-    dog += static_cast<float>(p.texture_weight) * texture;
-    if (on_line) *on_line += static_cast<float>(p.texture_weight) * texture;
+  if (sc.texture_gain > 0) {
+    const float texture = sc.texture_gain * ei.mean(xs[1], ys[1], xs[2], ys[2]);
+    dog += texture;
+    if (on_line) *on_line += texture;
   }
   if (p.print_weight > 0) {
     const int cx = std::clamp(x, xs[1], xs[2]);
@@ -224,8 +237,8 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
       for (const double rr : radii) {
         for (const double sign : {1.0, -1.0}) {
           const double cx = px + 0.5 + sign * rr * ux - x, cy = py + 0.5 + sign * rr * uy - y;
-          const int i = static_cast<int>(std::lround(cx / cell)) + half;
-          const int j = static_cast<int>(std::lround(cy / cell)) + half;
+          const int i = static_cast<int>(std::floor(cx / cell + 0.5)) + half;
+          const int j = static_cast<int>(std::floor(cy / cell + 0.5)) + half;
           if (i < 0 || j < 0 || i >= n || j >= n) continue;
           acc[static_cast<std::size_t>(j) * n + i] += g;
         }
@@ -334,12 +347,13 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       }
       const double r = *rad;
       const int step = std::max(1, static_cast<int>(p.step_fraction * r));
+      const Scale scale = scaleAt(r, p);
       const int x_start = rc.x0 + (step - 1) / 2;
       const int yy = std::min(y + (step - 1) / 2, rc.y1 - 1);
       for (int x = x_start; x < rc.x1; x += step) {
         if (!ignore.looked(x, yy)) continue;
         float line_resp = 0;
-        const float resp = response(ii, ei, x, yy, r, p, &line_resp) * static_cast<float>(rc.boost);
+        const float resp = response(ii, ei, x, yy, scale, p, &line_resp) * static_cast<float>(rc.boost);
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }

@@ -166,30 +166,39 @@ LearnResult learn(const ObjectKind& kind, const LearnConfig& config,
   std::set<std::string> seen;
   LearnResult result;
 
-  // Held-out samples: proposals and truth cuts from the validation scenarios (never trained on).
-  {
+  // Held-out samples: proposals and truth cuts from scenarios never trained on, one dataset per net.
+  auto heldOut = [&](const std::vector<ScenarioSource>& sources, const std::string& what) {
+    std::vector<cnn::Dataset> sets;
+    for (const NetState& st : nets) sets.push_back(st.validation);
     std::set<std::string> vseen;
-    auto frames = renderSources(kind, config.validation, 1, 0, [](int) { return Collect::kTruthAndProposals; }, log);
+    auto frames = renderSources(kind, sources, 1, 0, [](int) { return Collect::kTruthAndProposals; }, log);
     for (FrameCandidates& fc : frames[0]) {
       std::vector<Candidate> keep;
       for (const Candidate& c : fc.candidates) {
         if (vseen.insert(c.key).second) keep.push_back(c);
       }
-      for (NetState& st : nets) {
-        auto s = cutSamples(fc.image, keep, st.data.width, fc.scenario, fc.frame);
-        st.validation.samples.insert(st.validation.samples.end(), s.begin(), s.end());
+      for (std::size_t i = 0; i < nets.size(); ++i) {
+        auto s = cutSamples(fc.image, keep, nets[i].data.width, fc.scenario, fc.frame);
+        sets[i].samples.insert(sets[i].samples.end(), s.begin(), s.end());
       }
     }
-    for (const NetState& st : nets) {
-      const auto counts = st.validation.classCounts();
-      std::string msg = "validation " + st.stem + ":";
-      for (std::size_t i = 0; i < counts.size(); ++i) msg += " " + kind.classNames()[i] + "=" + std::to_string(counts[i]);
+    for (std::size_t i = 0; i < nets.size(); ++i) {
+      const auto counts = sets[i].classCounts();
+      std::string msg = what + " " + nets[i].stem + ":";
+      for (std::size_t k = 0; k < counts.size(); ++k) msg += " " + kind.classNames()[k] + "=" + std::to_string(counts[k]);
       log(msg);
       for (int count : counts) {
-        if (count == 0) throw Error("learn: the validation scenarios give no sample of a class");
+        if (count == 0) throw Error("learn: the " + what + " scenarios give no sample of a class");
       }
     }
+    return sets;
+  };
+  {
+    auto sets = heldOut(config.validation, "validation");
+    for (std::size_t i = 0; i < nets.size(); ++i) nets[i].validation = std::move(sets[i]);
   }
+  std::vector<cnn::Dataset> test_sets;
+  if (!config.test.empty()) test_sets = heldOut(config.test, "test");
 
   auto retrain = [&](RoundReport& rep) {
     for (NetState& st : nets) {
@@ -302,6 +311,25 @@ LearnResult learn(const ObjectKind& kind, const LearnConfig& config,
       cnn::writeDataset(st.data, tmp);
       fs::remove_all(dir);
       fs::rename(tmp, dir);
+    }
+  }
+  for (std::size_t i = 0; i < test_sets.size(); ++i) {
+    const cnn::Evaluation e = cnn::evaluate(nets[i].net, test_sets[i]);
+    result.test_accuracy.push_back(e.accuracy);
+    result.test_samples.push_back(e.samples);
+    if (!config.dataset_dir.empty()) {
+      cnn::Dataset& d = test_sets[i];
+      for (std::size_t k = 0; k < d.samples.size(); ++k) {
+        char name[64];
+        std::snprintf(name, sizeof name, "%06zu.png", k);
+        d.samples[k].origin.file = d.class_names[d.samples[k].label] + "/" + name;
+      }
+      const std::string dir = config.dataset_dir + "/test/" + nets[i].stem;
+      fs::create_directories(config.dataset_dir + "/test");
+      fs::remove_all(dir + ".tmp");
+      cnn::writeDataset(d, dir + ".tmp");
+      fs::remove_all(dir);
+      fs::rename(dir + ".tmp", dir);
     }
   }
   for (NetState& st : nets) {

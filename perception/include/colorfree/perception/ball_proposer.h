@@ -18,7 +18,7 @@ struct BallProposerParams {
   double min_radius_px = 2.4;       ///< positions where the ball would be smaller are skipped
   double max_radius_px = 90.0;      ///< positions where the ball would be larger are skipped
   /// Scan step in pixels: max(1, floor(step_fraction × expected radius)).
-  double step_fraction = 0.25;
+  double step_fraction = 0.5;
   /// Difference of box filters (a box-shaped DoG): the centre box has half-side
   /// inner_fraction × r, the surround box half-side outer_fraction × r; the response is the centre
   /// mean minus the surround, taken over the 3×3 grid of cells these boxes make: of the four pairs
@@ -39,7 +39,7 @@ struct BallProposerParams {
   /// brightest opposite pair (a line lights one pair, as does the ball on it), at least
   /// line_min_response; slots they do not fill go to the others.
   int line_count = 3;
-  double line_min_response = 20.0;
+  double line_min_response = 40.0;
   /// Robots' feet: a region this many ball diameters wide and deep around the feet point is
   /// scanned too (when robot percepts exist), and its responses are multiplied by feet_boost.
   double feet_region_diameters = 3.0;

@@ -57,7 +57,10 @@ struct ScenarioSource {
 struct LearnConfig {
   std::vector<ScenarioSource> train;       ///< rendered afresh every round (new frames each round)
   std::vector<ScenarioSource> bootstrap;   ///< scenes without the object: hard negatives
-  std::vector<ScenarioSource> validation;  ///< held-out scenarios: the accuracy figures
+  std::vector<ScenarioSource> validation;  ///< held-out scenarios: early stopping of every round
+  /// Test scenarios, used for nothing but the final accuracy figures (neither training nor early
+  /// stopping); written to <dataset_dir>/test/<stem> when given.
+  std::vector<ScenarioSource> test;
   int rounds = 3;             ///< active-learning rounds after the first (truth-cut) round
   int bootstrap_rounds = 1;
   float bootstrap_min_confidence = 0.5f;  ///< positive score for a hard negative
@@ -82,6 +85,8 @@ struct RoundReport {
 
 struct LearnResult {
   std::vector<RoundReport> rounds;
+  std::vector<double> test_accuracy;  ///< per net, on the test scenarios (empty without them)
+  std::vector<int> test_samples;
   std::vector<std::string> weights_written;
 };
 
