@@ -24,7 +24,4 @@ void addLearnCommand(CLI::App& app, int& exit_code);
 void addBenchCommand(CLI::App& app, int& exit_code);
 void addMergeCommand(CLI::App& app, int& exit_code);
 
-// `robot-data` (training patches for the robot nets) and `robot-eval` (robot stages scored).
-void addRobotCommands(CLI::App& app, int& exit_code);
-
 }  // namespace colorfree::app

@@ -18,7 +18,6 @@ int main(int argc, char** argv) {
   colorfree::app::addBenchCommand(app, exit_code);
   colorfree::app::addMergeCommand(app, exit_code);
   colorfree::app::addLearnCommand(app, exit_code);
-  colorfree::app::addRobotCommands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,19 +1,26 @@
 #!/bin/sh
-# Regenerates {robot_net,ori_boost_net,ori_net}.weights (into perception/models unless told) from the training
-# scenarios in scenes/train (never the evaluation scenes). Deterministic: same code, same
-# weights. Usage: scripts/train_robot_nets.sh [build dir] [work dir] [models dir]
+# Regenerates robot_net, ori_boost_net and ori_net .weights (into perception/models unless told)
+# with the shared active-learning loop (`colorfree learn`, paper 3.2) from the training scenarios
+# in scenes/train only (never the evaluation scenes); held-out accuracy from scenes/train/*holdout*.
+# Deterministic: same code, same weights, byte for byte. The three nets are independent; they can
+# run in parallel (the script runs them one after the other).
+# Usage: scripts/train_robot_nets.sh [build dir] [dataset dir] [models dir]
 set -eu
 BUILD=${1:-build}
-WORK=${2:-/tmp/colorfree_robot_nets}
-CF="$BUILD/bin/colorfree"
+DATA=${2:-/tmp/colorfree_robot_datasets}
 MODELS=${3:-perception/models}
-rm -rf "$WORK"
-"$CF" robot-data scenes/train/robot_detect_train.yaml scenes/train/robot_orientation_train.yaml \
-  --out "$WORK" --seed 11
-"$CF" train --cfg perception/models/robot_net.cfg --data "$WORK/robot_net" --classes none,robot \
-  --out "$MODELS"/robot_net.weights --epochs 40 --patience 10 --seed 1 --quiet
-"$CF" train --cfg perception/models/ori_boost_net.cfg --data "$WORK/ori_boost_net" \
-  --classes unusable,usable --out "$MODELS"/ori_boost_net.weights --epochs 60 --patience 15 \
-  --seed 1 --quiet
-"$CF" train --cfg perception/models/ori_net.cfg --data "$WORK/ori_net" --classes front,back,side \
-  --out "$MODELS"/ori_net.weights --epochs 60 --patience 15 --seed 1 --quiet
+CF="$BUILD/bin/colorfree"
+S=scenes/train
+ORI_TRAIN="$S/robot_orientation_train.yaml $S/robot_orientation_walk_train.yaml $S/robot_orientation_near_train.yaml"
+COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --models $MODELS --quiet"
+# shellcheck disable=SC2086
+"$CF" learn ori_boost --train $ORI_TRAIN --validation $S/robot_orientation_holdout.yaml $COMMON \
+  --dataset "$DATA/ori_boost"
+# shellcheck disable=SC2086
+"$CF" learn ori --train $ORI_TRAIN --validation $S/robot_orientation_holdout.yaml $COMMON \
+  --dataset "$DATA/ori"
+# shellcheck disable=SC2086
+"$CF" learn robot --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
+  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml \
+  --bootstrap $S/robot_absent.yaml --validation $S/robot_holdout.yaml $COMMON \
+  --dataset "$DATA/robot"

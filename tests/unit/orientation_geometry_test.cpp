@@ -145,11 +145,22 @@ TEST(ConsistencyCheck, AtMostOneOfEachClass) {
   // Front and back that disagree on the facing are rejected.
   EXPECT_FALSE(combineLineOrientations({{0, true}, {kPi, true}},
                                        {RobotSide::kFront, RobotSide::kBack}));
-  const auto both = combineLineOrientations({{1.0, false}, {0.5, true}},
+  // A side line first (best voted): its axis, turned to the facing the front line gives.
+  const auto both = combineLineOrientations({{1.0 - kPi, false}, {0.5, true}},
                                             {RobotSide::kSide, RobotSide::kFront});
   ASSERT_TRUE(both);
   EXPECT_TRUE(both->facing_known);
-  EXPECT_DOUBLE_EQ(both->angle_rad, 0.5);
+  EXPECT_DOUBLE_EQ(both->angle_rad, 1.0);
+  // The front line first: its own estimate.
+  const auto front_first = combineLineOrientations({{0.5, true}, {1.0, false}},
+                                                   {RobotSide::kFront, RobotSide::kSide});
+  ASSERT_TRUE(front_first);
+  EXPECT_DOUBLE_EQ(front_first->angle_rad, 0.5);
+  // A side axis far from the front line's facing (no orthogonal pair): the facing line's estimate.
+  const auto far = combineLineOrientations({{0.5 + kPi / 2, false}, {0.5, true}},
+                                           {RobotSide::kSide, RobotSide::kFront});
+  ASSERT_TRUE(far);
+  EXPECT_DOUBLE_EQ(far->angle_rad, 0.5);
 }
 
 TEST(OrientationTrack, MedianOverElevenAndExpiry) {

@@ -183,7 +183,7 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
         out.push_back(c);
         continue;
       }
-      if (off_deg > rules_.usable_max_deg) continue;  // OriNet only sees usable regions
+      if (off_deg > rules_.classed_max_deg) continue;  // OriNet only sees usable regions
       if (diff < std::numbers::pi / 4) {
         c.label = 2;  // along the heading: a side of the robot
       } else {

@@ -45,8 +45,16 @@ std::optional<RobotOrientation> combineLineOrientations(
     }
     if (!facing) facing = orientations[i];
   }
-  if (facing) return facing;
-  return orientations.front();
+  if (!facing) return orientations.front();
+  // The first line (the best voted) gives the most precise direction: when it is a side line, its
+  // axis with the facing the front or back line gives.
+  if (classes.front() == RobotSide::kSide) {
+    const double axis = orientations.front().angle_rad;
+    for (double a : {axis, wrapAngle(axis + std::numbers::pi)}) {
+      if (std::abs(wrapAngle(a - facing->angle_rad)) <= std::numbers::pi / 4) return RobotOrientation{a, true};
+    }
+  }
+  return facing;
 }
 
 std::optional<RobotOrientation> updateOrientationTrack(OrientationTrack& track,

@@ -20,8 +20,9 @@ enum class RobotNetChoice {
 /// Labelling rules for the robot kinds (angles between a line and the true heading's axis or its
 /// normal, whichever is nearer).
 struct RobotLabelRules {
-  double usable_max_deg = 9;      ///< a line this close to the axis or the normal is usable
-  double unusable_min_deg = 16;   ///< this far from both, unusable; in between left out
+  double usable_max_deg = 12;     ///< OriBoostNet: a line this close to the axis or the normal is usable
+  double unusable_min_deg = 20;   ///< ... this far from both, unusable; in between left out
+  double classed_max_deg = 9;     ///< OriNet: regions whose line is this close get a class
   int random_negatives = 2;       ///< RobotNet: robot-sized boxes at random ground points per frame
 };
 

@@ -19,9 +19,11 @@ RobotOrientation orientationFromLine(const Eigen::Vector2d& line_a, const Eigen:
 /// The paper's consistency check: at most one region of each class.
 bool classesConsistent(const std::vector<RobotSide>& classes);
 
-/// Combines the orientations of one robot's classified line regions into one estimate: a front
-/// or back line wins (facing known); side lines alone give only the axis. Empty when the classes
-/// are inconsistent or there is nothing.
+/// Combines the orientations of one robot's classified line regions (the first line, the best
+/// voted, first) into one estimate: a front or back line decides the facing; when the first line
+/// is a side line within 45° of that facing, the estimate is its axis turned to the facing (the
+/// best-voted line is the most precise); side lines alone give only the axis. Empty when the
+/// classes are inconsistent or there is nothing.
 std::optional<RobotOrientation> combineLineOrientations(
     const std::vector<RobotOrientation>& orientations, const std::vector<RobotSide>& classes);
 
