@@ -108,9 +108,9 @@ int nextEdge(const std::uint8_t* data, int i, int end, int step, int thr) {
 
 // Finds bright runs between a rising and a falling edge on one scan line, `data` in order along
 // it; `expected(i)` is the width expected for a line centred at sample i (0: none); `thr` is the
-// edge threshold (gray levels). Noise inside a bright run can make edges of its own: a rise that
-// starts from well above the carpet before the run, or a fall that stays well above it, is part
-// of the run and neither starts nor ends one.
+// edge threshold (gray levels). Noise inside a bright run can make edges of its own: a fall that
+// stays above half-way from the carpet before the run to the run's level is a dip inside the run
+// and does not end it.
 template <typename Expected>
 void scanLine(const std::uint8_t* data, int begin, int end, const Expected& expected,
               const FieldLineParams& p, int thr, std::vector<ScanSpot>& out) {
@@ -133,14 +133,10 @@ void scanLine(const std::uint8_t* data, int begin, int end, const Expected& expe
         ++i;
         if (dd > best_d) best_d = dd, best = i;
       }
-      if (rise_pos < 0 || 2 * (foot - rise_foot) <= rise_top - rise_foot) {
-        rise_pos = best - step / 2.0;
-        rise_strength = best_d;
-        rise_foot = foot;
-        rise_top = at(i);
-      } else {
-        rise_top = std::max(rise_top, at(i));  // a step up inside the pending run
-      }
+      rise_pos = best - step / 2.0;
+      rise_strength = best_d;
+      rise_foot = foot;
+      rise_top = at(i);
       ++i;
       continue;
     }
@@ -441,21 +437,22 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     return rows.empty() ? image.row(y) : rows.data() + static_cast<std::size_t>(y / spacing) * w;
   };
   const auto columnData = [&](int x) { return columns.data() + static_cast<std::size_t>(x / spacing) * h; };
-  const int step = p.edge_step_px;
-  // Carpet noise along both kinds of scan lines, from every fourth scan line and sample.
+  // Carpet noise along both kinds of scan lines, from every fourth scan line and sample: the
+  // differences of neighbouring pixels (as noisy as those over edge_step_px for pixel noise, but
+  // less affected by the carpet's smooth texture and shading).
   const auto noiseOf = [&](bool vertical) {
     EdgeNoise noise;
     if (vertical) {
       for (int x = spacing / 2; x < w; x += 4 * spacing) {
         const std::uint8_t* d = columnData(x);
-        for (int i = ignore.top_y[x] + step; i < ignore.bottom_y[x]; i += 4) noise.add(d[i] - d[i - step]);
+        for (int i = ignore.top_y[x] + 1; i < ignore.bottom_y[x]; i += 4) noise.add(d[i] - d[i - 1]);
       }
     } else {
       for (int y = spacing / 2; y < h; y += 4 * spacing) {
         if (expected_h[y] <= 0) continue;
         const std::uint8_t* d = rowData(y);
-        for (int x = step; x < w; x += 4) {
-          if (ignore.looked(x, y) && ignore.looked(x - step, y)) noise.add(d[x] - d[x - step]);
+        for (int x = 1; x < w; x += 4) {
+          if (ignore.looked(x, y) && ignore.looked(x - 1, y)) noise.add(d[x] - d[x - 1]);
         }
       }
     }
