@@ -371,11 +371,19 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     if (a) v = std::abs(a->y() - (y + 0.5));
     if (b) hz = std::abs(b->x() - cx);
   };
+  // Each measured row once (a block's last row is the next one's first).
+  double v1 = 0, h1 = 0;
+  int measured = -1;
   for (int y0 = 0; y0 < h; y0 += kWidthRowStep) {
     const int y1 = std::min(y0 + kWidthRowStep, h - 1);
-    double v0, h0, v1, h1;
-    widthsAt(y0, v0, h0);
+    double v0, h0;
+    if (measured == y0) {
+      v0 = v1, h0 = h1;
+    } else {
+      widthsAt(y0, v0, h0);
+    }
     widthsAt(y1, v1, h1);
+    measured = y1;
     for (int y = y0; y < std::min(y0 + kWidthRowStep, h); ++y) {
       // Rows next to the horizon or the distance limit keep 0 (no line expected).
       if (v0 <= 0 || v1 <= 0) {
