@@ -24,6 +24,8 @@ FieldLineParams FieldLineParams::load(const std::string& path) {
   p.scan_spacing_px = static_cast<int>(f.getInRange("scan_spacing_px", 1, 64));
   p.edge_step_px = static_cast<int>(f.getInRange("edge_step_px", 1, 8));
   p.min_edge_contrast = f.getInRange("min_edge_contrast", 1, 255);
+  p.edge_noise_factor = f.getInRange("edge_noise_factor", 0, 20);
+  p.smoothing_min_noise = f.getInRange("smoothing_min_noise", 0, 255);
   p.min_spot_contrast = f.getInRange("min_spot_contrast", 1, 255);
   p.min_edge_balance = f.getInRange("min_edge_balance", 0, 1);
   p.min_width_factor = f.getInRange("min_width_factor", 0, 10);
@@ -105,21 +107,25 @@ int nextEdge(const std::uint8_t* data, int i, int end, int step, int thr) {
 }
 
 // Finds bright runs between a rising and a falling edge on one scan line, `data` in order along
-// it; `expected(i)` is the width expected for a line centred at sample i (0: none).
+// it; `expected(i)` is the width expected for a line centred at sample i (0: none); `thr` is the
+// edge threshold (gray levels). Noise inside a bright run can make edges of its own: a fall that
+// stays above half-way from the carpet before the run to the run's level is a dip inside the run
+// and does not end it.
 template <typename Expected>
 void scanLine(const std::uint8_t* data, int begin, int end, const Expected& expected,
-              const FieldLineParams& p, std::vector<ScanSpot>& out) {
+              const FieldLineParams& p, int thr, std::vector<ScanSpot>& out) {
   const auto at = [data](int i) { return static_cast<int>(data[i]); };
   const int step = p.edge_step_px;
-  const int thr = std::clamp(static_cast<int>(std::ceil(p.min_edge_contrast)), 1, 255);
   int i = begin + step;
   double rise_pos = -1, rise_strength = 0;
+  int rise_foot = 0, rise_top = 0;  // levels before and after the pending rise
   while (i < end) {
     i = nextEdge(data, i, end, step, thr);
     if (i >= end) break;
     const int d = at(i) - at(i - step);
     if (d >= thr) {
-      // Strongest point of the rising edge.
+      // Strongest point of the rising edge, and the levels before and after it.
+      const int foot = at(i - step);
       int best = i, best_d = d;
       while (i + 1 < end) {
         const int dd = at(i + 1) - at(i + 1 - step);
@@ -129,6 +135,8 @@ void scanLine(const std::uint8_t* data, int begin, int end, const Expected& expe
       }
       rise_pos = best - step / 2.0;
       rise_strength = best_d;
+      rise_foot = foot;
+      rise_top = at(i);
       ++i;
       continue;
     }
@@ -139,6 +147,11 @@ void scanLine(const std::uint8_t* data, int begin, int end, const Expected& expe
         if (dd < thr) break;
         ++i;
         if (dd > best_d) best_d = dd, best = i;
+      }
+      // Still above half-way from the carpet to the run's level: a dip inside the run.
+      if (2 * (at(i) - rise_foot) > rise_top - rise_foot) {
+        ++i;
+        continue;
       }
       const double fall_pos = best - step / 2.0;
       const double width = fall_pos - rise_pos;
@@ -173,6 +186,44 @@ void scanLine(const std::uint8_t* data, int begin, int end, const Expected& expe
     ++i;
   }
 }
+
+// [1 4 6 4 1] / 16 along a scan line (in [begin, end), the ends repeated): carpet noise drops to
+// about half, a line's edges move by less than a pixel.
+void smoothScan(const std::uint8_t* in, int begin, int end, std::uint8_t* out) {
+  const auto at = [&](int i) { return static_cast<int>(in[std::clamp(i, begin, end - 1)]); };
+  int i = begin;
+  for (; i < std::min(end, begin + 2); ++i) {
+    out[i] = static_cast<std::uint8_t>((at(i - 2) + 4 * at(i - 1) + 6 * at(i) + 4 * at(i + 1) + at(i + 2) + 8) >> 4);
+  }
+  for (; i < end - 2; ++i) {
+    out[i] = static_cast<std::uint8_t>(
+        (in[i - 2] + 4 * in[i - 1] + 6 * in[i] + 4 * in[i + 1] + in[i + 2] + 8) >> 4);
+  }
+  for (; i < end; ++i) {
+    out[i] = static_cast<std::uint8_t>((at(i - 2) + 4 * at(i - 1) + 6 * at(i) + 4 * at(i + 1) + at(i + 2) + 8) >> 4);
+  }
+}
+
+// The spread of the edge differences along scan lines, from their median absolute value (lines
+// and robots are a small share of the samples): the standard deviation they would have as
+// Gaussian noise.
+class EdgeNoise {
+ public:
+  void add(int difference) { ++histogram_[std::abs(difference)]; ++n_; }
+  double sigma() const {
+    if (n_ == 0) return 0;
+    std::uint32_t seen = 0;
+    for (int v = 0; v < 256; ++v) {
+      seen += histogram_[v];
+      if (2 * seen >= n_) return (v + 0.5) / 0.6745;
+    }
+    return 255;
+  }
+
+ private:
+  std::uint32_t histogram_[256] = {};
+  std::uint32_t n_ = 0;
+};
 
 struct Fit {
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
@@ -320,11 +371,19 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     if (a) v = std::abs(a->y() - (y + 0.5));
     if (b) hz = std::abs(b->x() - cx);
   };
+  // Each measured row once (a block's last row is the next one's first).
+  double v1 = 0, h1 = 0;
+  int measured = -1;
   for (int y0 = 0; y0 < h; y0 += kWidthRowStep) {
     const int y1 = std::min(y0 + kWidthRowStep, h - 1);
-    double v0, h0, v1, h1;
-    widthsAt(y0, v0, h0);
+    double v0, h0;
+    if (measured == y0) {
+      v0 = v1, h0 = h1;
+    } else {
+      widthsAt(y0, v0, h0);
+    }
     widthsAt(y1, v1, h1);
+    measured = y1;
     for (int y = y0; y < std::min(y0 + kWidthRowStep, h); ++y) {
       // Rows next to the horizon or the distance limit keep 0 (no line expected).
       if (v0 <= 0 || v1 <= 0) {
@@ -379,6 +438,67 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
       }
     }
   }
+  // The horizontal scan lines (copied only when they are smoothed).
+  const int scan_rows = (h - spacing / 2 + spacing - 1) / spacing;
+  std::vector<std::uint8_t> rows;
+  const auto rowData = [&](int y) -> const std::uint8_t* {
+    return rows.empty() ? image.row(y) : rows.data() + static_cast<std::size_t>(y / spacing) * w;
+  };
+  const auto columnData = [&](int x) { return columns.data() + static_cast<std::size_t>(x / spacing) * h; };
+  // Carpet noise along both kinds of scan lines, from every fourth scan line and sample: the
+  // differences of neighbouring pixels (as noisy as those over edge_step_px for pixel noise, but
+  // less affected by the carpet's smooth texture and shading).
+  const auto noiseOf = [&](bool vertical) {
+    EdgeNoise noise;
+    if (vertical) {
+      for (int x = spacing / 2; x < w; x += 4 * spacing) {
+        const std::uint8_t* d = columnData(x);
+        for (int i = ignore.top_y[x] + 1; i < ignore.bottom_y[x]; i += 4) noise.add(d[i] - d[i - 1]);
+      }
+    } else {
+      for (int y = spacing / 2; y < h; y += 4 * spacing) {
+        if (expected_h[y] <= 0) continue;
+        const std::uint8_t* d = rowData(y);
+        for (int x = 1; x < w; x += 4) {
+          if (ignore.looked(x, y) && ignore.looked(x - 1, y)) noise.add(d[x] - d[x - 1]);
+        }
+      }
+    }
+    return noise.sigma();
+  };
+  double noise_v = noiseOf(true), noise_h = noiseOf(false);
+  // Noisy frames: the scan lines are smoothed first (the noise of one pixel is the edge noise
+  // over sqrt(2)).
+  if (std::max(noise_v, noise_h) / std::sqrt(2.0) >= p.smoothing_min_noise) {
+    std::vector<std::uint8_t> raw(static_cast<std::size_t>(std::max(w, h)));
+    for (int x = spacing / 2; x < w; x += spacing) {
+      const int top = ignore.top_y[x], bottom = ignore.bottom_y[x];
+      if (bottom - top < 3) continue;
+      std::uint8_t* d = columns.data() + static_cast<std::size_t>(x / spacing) * h;
+      std::memcpy(raw.data() + top, d + top, static_cast<std::size_t>(bottom - top));
+      smoothScan(raw.data(), top, bottom, d);
+    }
+    rows.assign(static_cast<std::size_t>(scan_rows) * w, 0);
+    for (int y = spacing / 2; y < h; y += spacing) {
+      std::uint8_t* d = rows.data() + static_cast<std::size_t>(y / spacing) * w;
+      std::memcpy(d, image.row(y), static_cast<std::size_t>(w));
+      // Each looked-at run on its own (the ignored pixels do not bleed in).
+      int x = 0;
+      while (x < w) {
+        while (x < w && !ignore.looked(x, y)) ++x;
+        const int begin = x;
+        while (x < w && ignore.looked(x, y)) ++x;
+        if (x - begin >= 3) smoothScan(image.row(y), begin, x, d);
+      }
+    }
+    noise_v = noiseOf(true);
+    noise_h = noiseOf(false);
+  }
+  const auto threshold = [&](double noise) {
+    return std::clamp(static_cast<int>(std::ceil(std::max(p.min_edge_contrast, p.edge_noise_factor * noise))), 1, 255);
+  };
+  const int thr_v = threshold(noise_v), thr_h = threshold(noise_h);
+
   for (int x = spacing / 2; x < w; x += spacing) {
     vertical_lines.emplace_back();
     const int top = ignore.top_y[x];
@@ -386,8 +506,8 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
     if (bottom - top < 3 * p.edge_step_px) continue;
     found.clear();
     scanLine(
-        columns.data() + static_cast<std::size_t>(x / spacing) * h, top, bottom,
-        [&](int y) { return expected_v[std::clamp(y, 0, h - 1)]; }, p, found);
+        columnData(x), top, bottom, [&](int y) { return expected_v[std::clamp(y, 0, h - 1)]; }, p, thr_v,
+        found);
     for (const ScanSpot& s : found) {
       const int id = addSpot({x + 0.5, s.along + 0.5}, s.width,
                              expected_v[std::clamp(static_cast<int>(s.along), 0, h - 1)], true);
@@ -399,7 +519,7 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
   for (int y = spacing / 2; y < h; y += spacing) {
     horizontal_lines.emplace_back();
     if (expected_h[y] <= 0) continue;
-    const std::uint8_t* row = image.row(y);
+    const std::uint8_t* row = rowData(y);
     const bool whole_row = y >= max_top && y < min_bottom;
     int x = 0;
     while (x < w) {
@@ -413,7 +533,7 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
       }
       if (x - begin < 3 * p.edge_step_px) continue;
       found.clear();
-      scanLine(row, begin, x, [&](int) { return expected_h[y]; }, p, found);
+      scanLine(row, begin, x, [&](int) { return expected_h[y]; }, p, thr_h, found);
       for (const ScanSpot& s : found) {
         const int id = addSpot({s.along + 0.5, y + 0.5}, s.width, expected_h[y], false);
         if (id >= 0) horizontal_lines.back().push_back(id);

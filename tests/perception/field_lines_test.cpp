@@ -74,11 +74,13 @@ struct Detected {
   Truth truth;
 };
 
-Detected detect(const FieldPose& pose, double pitch_deg, double gradient, std::uint64_t seed) {
+Detected detect(const FieldPose& pose, double pitch_deg, double gradient, std::uint64_t seed,
+                double pixel_noise = 5) {
   const CameraModel cam = test::testCamera(pitch_deg);
   test::SyntheticScene scene = test::sceneFromField(FieldDimensions{}, pose);
   scene.gradient = gradient;
   scene.seed = seed;
+  scene.pixel_noise = pixel_noise;
   const GrayImage image = test::renderScene(cam, scene);
   const IgnoreMask mask = IgnoreMask::combine(FieldBoundaryDetector().run(image.view(), cam),
                                               BodyContourProvider().run(cam), 640, 480);
@@ -130,6 +132,56 @@ INSTANTIATE_TEST_SUITE_P(Scenes, FieldLinesOnSyntheticField,
                                            SceneParam{1, 0.5, 4}, SceneParam{2, 0.0, 5}, SceneParam{2, 0.5, 6},
                                            SceneParam{3, 0.0, 7}, SceneParam{3, 0.5, 8}, SceneParam{4, 0.0, 9},
                                            SceneParam{4, 0.5, 10}));
+
+// Camera noise of sigma 10 (real NAO frames are about as noisy): the lines are still found, and
+// only where drawn.
+class FieldLinesUnderNoise : public ::testing::TestWithParam<std::tuple<int, double>> {};
+
+TEST_P(FieldLinesUnderNoise, LinesFoundWhereDrawn) {
+  const auto [scene, noise] = GetParam();
+  const Detected clean = detect(kScenes[scene].pose, kScenes[scene].pitch_deg, 0.0, 40 + scene, 0);
+  const Detected noisy = detect(kScenes[scene].pose, kScenes[scene].pitch_deg, 0.0, 40 + scene, noise);
+  for (const auto& l : noisy.result.features.lines) {
+    EXPECT_TRUE(onSomeTrueLine(l, noisy.truth))
+        << "line (" << l.start_in_robot.transpose() << ")-(" << l.end_in_robot.transpose() << ")";
+  }
+  for (const auto& x : noisy.result.features.intersections) {
+    EXPECT_TRUE(matchesTrueIntersection(x, noisy.truth)) << typeName(x.type) << " at " << x.position_in_robot.transpose();
+  }
+  // The painted lines seen without noise are still seen, but for at most one (a thin far one).
+  const auto seen = [](const Detected& d) {
+    int n = 0;
+    for (const auto& seg : d.truth.lines) {
+      Truth one;
+      one.lines = {seg};
+      bool found = false;
+      for (const auto& l : d.result.features.lines) found = found || onSomeTrueLine(l, one);
+      n += found;
+    }
+    return n;
+  };
+  ASSERT_GE(seen(clean), 2);
+  EXPECT_GE(seen(noisy), seen(clean) - 1) << "painted lines seen without noise " << seen(clean);
+}
+
+INSTANTIATE_TEST_SUITE_P(Noise, FieldLinesUnderNoise,
+                         ::testing::Combine(::testing::Values(0, 1, 2, 3, 4), ::testing::Values(10.0)));
+
+TEST(FieldLines, NothingOnStrongNoise) {
+  const CameraModel cam = test::testCamera(22);
+  const FieldLineDetector detector;
+  const IgnoreMask all = IgnoreMask::all(640, 480);
+  for (double sigma : {10.0, 25.0, 40.0}) {
+    for (std::uint64_t seed : {5u, 6u}) {
+      const GrayImage noise = test::noiseImage(640, 480, 90, sigma, seed);
+      const FieldLineResult r = detector.run(noise.view(), cam, all);
+      EXPECT_TRUE(r.features.lines.empty()) << sigma << " " << r.features.lines.size() << " lines";
+      EXPECT_TRUE(r.features.intersections.empty()) << sigma;
+      EXPECT_FALSE(r.features.centre_circle) << sigma;
+      EXPECT_TRUE(r.features.penalty_marks.empty()) << sigma;
+    }
+  }
+}
 
 class FieldLinesLighting : public ::testing::TestWithParam<double> {};
 

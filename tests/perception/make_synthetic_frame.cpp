@@ -1,5 +1,5 @@
 // Writes a synthetic field frame and its camera file, to try `colorfree detect` on:
-//   make_synthetic_frame OUT.png OUT_CAMERA.yaml [x_m y_m theta_deg pitch_deg gradient seed]
+//   make_synthetic_frame OUT.png OUT_CAMERA.yaml [x_m y_m theta_deg pitch_deg gradient seed pixel_noise]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -9,7 +9,7 @@
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: %s OUT.png OUT_CAMERA.yaml [x_m y_m theta_deg pitch_deg gradient seed]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s OUT.png OUT_CAMERA.yaml [x_m y_m theta_deg pitch_deg gradient seed pixel_noise]\n", argv[0]);
     return 2;
   }
   const auto arg = [&](int i, double fallback) { return argc > i ? std::atof(argv[i]) : fallback; };
@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
     scene.gradient = arg(7, 0);
     scene.seed = static_cast<std::uint64_t>(arg(8, 1));
     scene.carpet_edge_m = 1e9;
+    scene.pixel_noise = arg(9, scene.pixel_noise);
     const colorfree::GrayImage image = colorfree::test::renderScene(camera, scene);
     colorfree::writeGrayPng(argv[1], image.view());
     camera.save(argv[2]);

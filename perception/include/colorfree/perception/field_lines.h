@@ -17,6 +17,12 @@ struct FieldLineParams {
   int scan_spacing_px = 8;     ///< between vertical scan lines and between horizontal ones
   int edge_step_px = 2;        ///< an edge is the luminance difference over this many pixels
   double min_edge_contrast = 18;  ///< gray levels of a rising or falling edge
+  /// ... and at least this many times the carpet's noise (the spread of the differences of
+  /// neighbouring pixels along the scan lines, estimated per frame and scan direction).
+  double edge_noise_factor = 3.5;
+  /// Above this pixel noise (gray levels, estimated per frame) the scan lines are smoothed
+  /// ([1 4 6 4 1] / 16) before the edges are searched.
+  double smoothing_min_noise = 16;
   /// The bright run's mean must exceed the mean of the carpet on both of its sides by this much
   /// (gray levels): averaging keeps carpet noise from making spots.
   double min_spot_contrast = 24;
