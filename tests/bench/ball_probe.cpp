@@ -93,6 +93,7 @@ int main(int argc, char** argv) {
         char name[256];
         std::snprintf(name, sizeof name, "%s/c%02d_f%03d.png", png_dir.c_str(), c, f.frame_index);
         writeGrayPng(name, f.image.view());
+        f.truth.camera.model.save(std::string(name) + ".camera.yaml");  // for colorfree detect
       }
     });
   }
