@@ -30,6 +30,7 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.texture_reference_radius_px = f.getInRange("texture_reference_radius_px", 1, 100);
   p.texture_scale_exponent = f.getInRange("texture_scale_exponent", 0, 2);
   p.robot_body_factor = f.getInRange("robot_body_factor", 0, 1);
+  p.off_axis_exponent = f.getInRange("off_axis_exponent", 0, 2);
   p.centre_search_fraction = f.getInRange("centre_search_fraction", 0, 2);
   p.radius_tolerance = f.getInRange("radius_tolerance", 0, 0.5);
   p.min_gradient = f.getInRange("min_gradient", 0, 255);
@@ -117,6 +118,18 @@ class Integral {
 // Centre mean minus, over the four pairs of opposite surround cells, the brightest pair's darker
 // cell (a line or a crossing through the centre lights both cells of a pair; a robot's foot or a
 // line beside the ball only one), plus the print term: the spread of the centre's four quadrants.
+// The ball's expected radius at `pixel`: the camera model's (on the optical axis) stretched by
+// (1 / cos of the angle off the axis) ^ off_axis_exponent: a sphere off the axis projects to an
+// ellipse 1 / cos wide across and 1 / cos^2 along the radial direction.
+std::optional<double> expectedRadius(const CameraModel& camera, const BallProposerParams& p,
+                                     const Eigen::Vector2d& pixel, double ball_radius_m) {
+  const auto r = camera.ballRadiusPx(pixel, ball_radius_m);
+  if (!r || p.off_axis_exponent == 0) return r;
+  const CameraIntrinsics& in = camera.intrinsics();
+  const double u = (pixel.x() - in.center_x_px) / in.focal_x_px, v = (pixel.y() - in.center_y_px) / in.focal_y_px;
+  return *r * std::pow(1 + u * u + v * v, 0.5 * p.off_axis_exponent);
+}
+
 // The filter's sizes at one expected radius (the same along a scan row).
 struct Scale {
   int a, b;            // centre and surround box half-sides, pixels
@@ -285,7 +298,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   }
   if (robots != nullptr) {
     for (const RobotPercept& robot : *robots) {
-      const auto rad = camera.ballRadiusPx(robot.feet_px, p.ball_radius_m);
+      const auto rad = expectedRadius(camera, p, robot.feet_px, p.ball_radius_m);
       if (!rad) continue;
       const double half = p.feet_region_diameters * 2 * *rad / 2;
       const int x0 = std::max(0, static_cast<int>(std::floor(robot.feet_px.x() - half)));
@@ -306,8 +319,8 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   for (std::size_t k = 0; k < rects.size(); ++k) {
     const ScanRect& rc = rects[k];
     const double cx = (rc.x0 + rc.x1) / 2.0;
-    radii[k].top = camera.ballRadiusPx({cx, rc.y0 + 0.5}, p.ball_radius_m);
-    radii[k].bottom = camera.ballRadiusPx({cx, rc.y1 - 0.5}, p.ball_radius_m);
+    radii[k].top = expectedRadius(camera, p, {cx, rc.y0 + 0.5}, p.ball_radius_m);
+    radii[k].bottom = expectedRadius(camera, p, {cx, rc.y1 - 0.5}, p.ball_radius_m);
     const double rmax = std::min(p.max_radius_px, std::max({p.min_radius_px, radii[k].top.value_or(0),
                                                             radii[k].bottom.value_or(0)}));
     const int margin = static_cast<int>(std::ceil(p.outer_fraction * rmax)) + 2;
@@ -339,7 +352,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
         const double t = rc.y1 - 1 > rc.y0 ? (y - rc.y0) / double(rc.y1 - 1 - rc.y0) : 0.0;
         rad = *radii[k].top + t * (*radii[k].bottom - *radii[k].top);
       } else {
-        rad = camera.ballRadiusPx({cx, y + 0.5}, p.ball_radius_m);
+        rad = expectedRadius(camera, p, {cx, y + 0.5}, p.ball_radius_m);
       }
       if (!rad || *rad > p.max_radius_px || *rad < p.min_radius_px) {
         ++y;
@@ -377,7 +390,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   // lying on the ground in front of them: their candidates count robot_body_factor of their response.
   if (robots != nullptr && p.robot_body_factor < 1) {
     for (const RobotPercept& robot : *robots) {
-      const auto rad = camera.ballRadiusPx(robot.feet_px, p.ball_radius_m);
+      const auto rad = expectedRadius(camera, p, robot.feet_px, p.ball_radius_m);
       if (!rad) continue;
       const double top_of_feet = robot.feet_px.y() - p.feet_region_diameters * *rad;
       for (std::vector<Candidate>* list : {&candidates, &line_candidates}) {

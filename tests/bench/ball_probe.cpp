@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
   env("BP_OUTER", config.ball_proposer.outer_fraction);
   env("BP_TEXEXP", config.ball_proposer.texture_scale_exponent);
   env("BP_BODY", config.ball_proposer.robot_body_factor);
+  env("BP_OFFAXIS", config.ball_proposer.off_axis_exponent);
   env("BP_STEP", config.ball_proposer.step_fraction);
   const Pipeline pipeline(config);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
@@ -92,6 +93,7 @@ int main(int argc, char** argv) {
         char name[256];
         std::snprintf(name, sizeof name, "%s/c%02d_f%03d.png", png_dir.c_str(), c, f.frame_index);
         writeGrayPng(name, f.image.view());
+        f.truth.camera.model.save(std::string(name) + ".camera.yaml");  // for colorfree detect
       }
     });
   }

@@ -66,7 +66,8 @@ std::uint64_t frameSeed(const GrayImage& image) {
 std::string robotTruthText(const RobotInImage& r) {
   char text[128];
   std::snprintf(text, sizeof text, "robot %d d=%.2fm heading=%.1fdeg visible=%.2f", r.index,
-                r.distance_m, r.heading_in_observer_rad * 180 / std::numbers::pi, r.visible_fraction);
+                r.distance_m, r.heading_in_observer_rad * 180 / std::numbers::pi,
+                r.visible_fraction);
   return text;
 }
 
@@ -230,7 +231,8 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
   return out;
 }
 
-std::vector<Candidate> RobotKind::truthSamples(const GrayImage& /*image*/, const CameraModel& camera,
+std::vector<Candidate> RobotKind::truthSamples(const GrayImage& /*image*/,
+                                               const CameraModel& camera,
                                                const FrameTruth& truth) const {
   std::vector<Candidate> out;
   if (which_ != RobotNetChoice::kRobotNet) return out;

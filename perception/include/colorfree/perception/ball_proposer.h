@@ -15,6 +15,9 @@ namespace colorfree {
 /// Parameters of the ball proposal stage (perception/params/ball_proposer.yaml).
 struct BallProposerParams {
   double ball_radius_m = 0.05;      ///< the ball (SPL: 0.1 m diameter)
+  /// The camera model's ball radius holds on the optical axis; off it, it is multiplied by
+  /// (1 / cos of the angle off the axis) ^ off_axis_exponent (1: across, 2: along the radial line).
+  double off_axis_exponent = 1.5;
   double min_radius_px = 2.4;       ///< positions where the ball would be smaller are skipped
   double max_radius_px = 90.0;      ///< positions where the ball would be larger are skipped
   /// Scan step in pixels: max(1, floor(step_fraction × expected radius)).

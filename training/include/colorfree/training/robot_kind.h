@@ -20,10 +20,11 @@ enum class RobotNetChoice {
 /// Labelling rules for the robot kinds (angles between a line and the true heading's axis or its
 /// normal, whichever is nearer).
 struct RobotLabelRules {
-  double usable_max_deg = 12;     ///< OriBoostNet: a line this close to the axis or the normal is usable
-  double unusable_min_deg = 20;   ///< ... this far from both, unusable; in between left out
-  double classed_max_deg = 9;     ///< OriNet: regions whose line is this close get a class
-  int random_negatives = 2;       ///< RobotNet: robot-sized boxes at random ground points per frame
+  double usable_max_deg =
+      12;  ///< OriBoostNet: a line this close to the axis or the normal is usable
+  double unusable_min_deg = 20;  ///< ... this far from both, unusable; in between left out
+  double classed_max_deg = 9;    ///< OriNet: regions whose line is this close get a class
+  int random_negatives = 2;      ///< RobotNet: robot-sized boxes at random ground points per frame
 };
 
 /// The robot-specific part of the loop. Proposals come from the real RobotProposer (after the
