@@ -1,6 +1,6 @@
 // Development probe (not in CTest): renders the frames of a scenario and prints, per frame, the
-// true ball, every ball proposal (distance to the truth, match, both nets' scores) and the percepts,
-// so a miss can be traced to the proposer or to the nets.
+// true ball, every ball proposal (distance to the truth, match, both nets' scores) and the
+// percepts, so a miss can be traced to the proposer or to the nets.
 //   ball_probe SCENARIO [frames_per_case] [case] [--png DIR]
 #include <cstdio>
 #include <cstdlib>
@@ -58,14 +58,16 @@ int main(int argc, char** argv) {
       const BallInImage& b = truth.ball;
       const bool demand = truth.ball_present && b.in_view && b.should_detect;
       std::printf("case %d %s frame %d: ball %s c=(%.1f,%.1f) r=%.1f vis=%.2f d=%.2f%s\n", c,
-                  runner.scenarioCase(c).name().c_str(), f.frame_index, truth.ball_present && b.in_view ? "in view" : "out",
-                  b.centre_px.x(), b.centre_px.y(), b.radius_px, b.visible_fraction, b.distance_m,
+                  runner.scenarioCase(c).name().c_str(), f.frame_index,
+                  truth.ball_present && b.in_view ? "in view" : "out", b.centre_px.x(),
+                  b.centre_px.y(), b.radius_px, b.visible_fraction, b.distance_m,
                   demand ? " DEMANDED" : "");
       bool ph = false, dh = false;
       const auto& props = *frame.ball_proposals;
       for (std::size_t i = 0; i < props.size(); ++i) {
         const auto& p = props[i];
-        const bool m = truth.ball_present && b.in_view && ballMatchCost(b, p.centre_px, scoring).has_value();
+        const bool m =
+            truth.ball_present && b.in_view && ballMatchCost(b, p.centre_px, scoring).has_value();
         ph = ph || (m && demand);
         float bc = -1, bn = -1;
         if (frame.ball_decisions) {
@@ -73,21 +75,26 @@ int main(int argc, char** argv) {
             if (d.proposal == static_cast<int>(i)) bc = d.boost_confidence, bn = d.ball_confidence;
           }
         }
-        std::printf("   prop %2zu (%.1f,%.1f) r=%.1f resp=%.1f dist=%.1f%s boost=%.3f ball=%.3f\n", i, p.centre_px.x(),
-                    p.centre_px.y(), p.radius_px, p.response, (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", bc, bn);
+        std::printf("   prop %2zu (%.1f,%.1f) r=%.1f resp=%.1f dist=%.1f%s boost=%.3f ball=%.3f\n",
+                    i, p.centre_px.x(), p.centre_px.y(), p.radius_px, p.response,
+                    (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", bc, bn);
       }
       for (const auto& bp : *frame.ball_percepts) {
-        const bool m = truth.ball_present && b.in_view && ballMatchCost(b, bp.centre_px, scoring).has_value();
+        const bool m =
+            truth.ball_present && b.in_view && ballMatchCost(b, bp.centre_px, scoring).has_value();
         if (m && demand) dh = true;
         if (!m) ++fps;
-        std::printf("   PERCEPT (%.1f,%.1f) conf=%.3f %s\n", bp.centre_px.x(), bp.centre_px.y(), bp.confidence, m ? "TP" : "FP");
+        std::printf("   PERCEPT (%.1f,%.1f) conf=%.3f %s\n", bp.centre_px.x(), bp.centre_px.y(),
+                    bp.confidence, m ? "TP" : "FP");
       }
       if (demand) {
         ++truths;
         prop_hits += ph;
         hits += dh;
-        if (!ph) std::printf("   >>> PROPOSAL MISS\n");
-        else if (!dh) std::printf("   >>> NET MISS\n");
+        if (!ph)
+          std::printf("   >>> PROPOSAL MISS\n");
+        else if (!dh)
+          std::printf("   >>> NET MISS\n");
       }
       if (!png_dir.empty()) {
         char name[256];
@@ -97,6 +104,7 @@ int main(int argc, char** argv) {
       }
     });
   }
-  std::printf("truths %d proposal hits %d detected %d false positives %d\n", truths, prop_hits, hits, fps);
+  std::printf("truths %d proposal hits %d detected %d false positives %d\n", truths, prop_hits,
+              hits, fps);
   return 0;
 }
