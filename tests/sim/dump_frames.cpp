@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 
 #include "colorfree/perception/error.h"
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   const int width = argc > 3 ? std::atoi(argv[2]) : 640;
   const int height = argc > 3 ? std::atoi(argv[3]) : 480;
   try {
+    std::filesystem::create_directories(out);
     for (const char* preset :
          {"normal", "dim", "overexposed", "directional", "uneven", "flicker"}) {
       SceneSpec spec;
@@ -107,7 +109,7 @@ int main(int argc, char** argv) {
         writeGrayPng(name + "_objects.png", labelImage(r.object_map).view());
       }
     }
-  } catch (const Error& e) {
+  } catch (const std::exception& e) {  // colorfree's Error, or the folder that cannot be made
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
   }
