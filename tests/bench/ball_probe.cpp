@@ -1,9 +1,11 @@
 // Development probe (not in CTest): renders the frames of a scenario and prints, per frame, the
 // true ball, every ball proposal (distance to the truth, match, both nets' scores) and the
 // percepts, so a miss can be traced to the proposer or to the nets.
-//   ball_probe SCENARIO [frames_per_case] [case] [--png DIR]
+//   ball_probe SCENARIO [frames_per_case] [case] [png_dir]
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
+#include <filesystem>
 #include <string>
 
 #include "colorfree/groundtruth/field_markings.h"
@@ -18,7 +20,9 @@
 
 using namespace colorfree;
 
-int main(int argc, char** argv) {
+namespace {
+
+int probe(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr, "usage: ball_probe SCENARIO [frames_per_case] [case] [png_dir]\n");
     return 2;
@@ -26,6 +30,7 @@ int main(int argc, char** argv) {
   const int frames = argc > 2 ? std::atoi(argv[2]) : -1;
   const int only_case = argc > 3 ? std::atoi(argv[3]) : -1;
   const std::string png_dir = argc > 4 ? argv[4] : "";
+  if (!png_dir.empty()) std::filesystem::create_directories(png_dir);
   const FieldDimensions dims = FieldDimensions::loadDefault();
   const FieldMarkings markings = FieldMarkings::fromDimensions(dims);
   const ScoringParams scoring = ScoringParams::loadDefault();
@@ -107,4 +112,15 @@ int main(int argc, char** argv) {
   std::printf("truths %d proposal hits %d detected %d false positives %d\n", truths, prop_hits,
               hits, fps);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return probe(argc, argv);
+  } catch (const std::exception& e) {  // a broken scenario, an unwritable folder
+    std::fprintf(stderr, "ball_probe: %s\n", e.what());
+    return 2;
+  }
 }
