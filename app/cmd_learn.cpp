@@ -34,6 +34,7 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     std::vector<std::string> train, bootstrap, validation, test;
     int frames = 8, stride = 4, rounds = 3, bootstrap_rounds = 1, epochs = 40, patience = 8;
     float bootstrap_confidence = 0.5f;
+    float border_cut = 0.0f;
     std::uint64_t seed = 1;
     std::string dataset = "build/ball_dataset";
     std::string models;
@@ -56,6 +57,9 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--epochs", o->epochs, "training epochs per round at most")->capture_default_str();
   cmd->add_option("--patience", o->patience, "early stopping patience, epochs")->capture_default_str();
   cmd->add_option("--seed", o->seed, "trainer seed")->capture_default_str();
+  cmd->add_option("--border-cut", o->border_cut,
+                  "augmentation: chance of cutting a patch as the image border cuts an object (0..1)")
+      ->capture_default_str();
   cmd->add_option("--dataset", o->dataset, "dataset folder to write (one sub-folder per net)")->capture_default_str();
   cmd->add_option("--models", o->models, "model folder: cfgs read, weights written (default: perception/models)");
   cmd->add_flag("--quiet", o->quiet, "only the final summary");
@@ -78,6 +82,9 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     if (o->frames < 1 || o->stride < 1 || o->rounds < 0 || o->bootstrap_rounds < 0 || o->epochs < 1) {
       throw Error("learn: --frames, --stride and --epochs must be positive, --rounds not negative");
     }
+    if (!(o->border_cut >= 0.0f && o->border_cut <= 1.0f)) {
+      throw Error("learn: --border-cut must lie in 0..1, not " + std::to_string(o->border_cut));
+    }
     training::LearnConfig config;
     config.train = sources(o->train, o->frames, o->stride);
     config.bootstrap = sources(o->bootstrap, o->frames, o->stride);
@@ -91,6 +98,7 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     config.trainer.max_epochs = o->epochs;
     config.trainer.patience_epochs = o->patience;
     config.trainer.seed = o->seed;
+    config.trainer.augmentation.border_cut_probability = o->border_cut;
     const training::ObjectKind& kind = *kind_ptr;
     const auto result = training::learn(kind, config, [o](const std::string& line) {
       if (!o->quiet) std::printf("%s\n", line.c_str());

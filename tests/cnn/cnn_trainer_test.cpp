@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 
 #include "colorfree/perception/cnn/classifier.h"
 #include "colorfree/perception/cnn/dataset.h"
@@ -145,6 +146,49 @@ TEST(CnnTrainer, FlipsOnlyWhereTheLabelAllows) {
   // Mirroring left into right with the label kept makes the classes indistinguishable.
   p.augmentation.flip_allowed = {true, true};
   EXPECT_LT(train(boostNet(2), data, p).validation.accuracy, 0.8);
+}
+
+TEST(CnnTrainer, BorderCutRepeatsTheEdgeRowOrColumnOnOneSide) {
+  // A patch whose every pixel differs: the cut shows as runs of equal values.
+  GrayImage patch(12, 12);
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 12; ++x) patch.at(x, y) = static_cast<std::uint8_t>(10 + 12 * y + x);
+  AugmentationParams p;  // geometry and photometry off: only the cut remains
+  p.brightness = p.contrast = p.noise_stddev = p.blur_probability = p.shift_px = p.scale = 0.0f;
+  p.border_cut_probability = 1.0f;
+  p.border_cut_max_fraction = 0.5f;
+  std::mt19937_64 rng(3);
+  std::set<std::pair<int, int>> cuts_seen;  // (side, depth)
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<float> out(144);
+    augmentPatch(patch, p, false, rng, out.data());
+    // The output is the patch cut on exactly one side (0 left, 1 right, 2 top, 3 bottom) from
+    // exactly one depth: the pixels beyond the cut repeat the last row or column before it.
+    int matches = 0;
+    for (int side = 0; side < 4; ++side) {
+      for (int depth = 1; depth <= 6; ++depth) {
+        bool same = true;
+        for (int y = 0; y < 12 && same; ++y) {
+          for (int x = 0; x < 12 && same; ++x) {
+            int sx = x, sy = y;
+            if (side == 0) sx = std::max(x, depth);
+            if (side == 1) sx = std::min(x, 11 - depth);
+            if (side == 2) sy = std::max(y, depth);
+            if (side == 3) sy = std::min(y, 11 - depth);
+            same = out[y * 12 + x] == static_cast<float>(patch.at(sx, sy));
+          }
+        }
+        if (same) ++matches, cuts_seen.insert({side, depth});
+      }
+    }
+    ASSERT_EQ(matches, 1) << "trial " << trial;
+  }
+  EXPECT_EQ(cuts_seen.size(), 24u);  // every side, every depth 1..6
+  // Probability 0: never cut.
+  p.border_cut_probability = 0.0f;
+  std::vector<float> out(144);
+  augmentPatch(patch, p, false, rng, out.data());
+  for (int i = 0; i < 144; ++i) ASSERT_EQ(out[i], static_cast<float>(patch.data()[i]));
 }
 
 TEST(CnnTrainer, EarlyStoppingKeepsTheBestEpoch) {

@@ -340,6 +340,18 @@ class Augmenter {
     const bool blur = unit(rng) < p_.blur_probability;
     const float sigma = p_.noise_stddev * unit(rng);
     std::uint64_t noise_state = rng();
+    // Border cut: keep rows/columns [lo, hi] on one side, replicate the edge one beyond them.
+    int u_lo = 0, u_hi = w_ - 1, v_lo = 0, v_hi = h_ - 1;
+    if (p_.border_cut_probability > 0.0f && unit(rng) < p_.border_cut_probability) {
+      const int side = static_cast<int>(unit(rng) * 4.0f) & 3;
+      const float depth = p_.border_cut_max_fraction * (1.0f - unit(rng));  // (0, max]
+      const int cut_u = std::clamp(static_cast<int>(depth * w_ + 0.5f), 1, w_ - 1);
+      const int cut_v = std::clamp(static_cast<int>(depth * h_ + 0.5f), 1, h_ - 1);
+      if (side == 0) u_lo = cut_u;
+      if (side == 1) u_hi = w_ - 1 - cut_u;
+      if (side == 2) v_lo = cut_v;
+      if (side == 3) v_hi = h_ - 1 - cut_v;
+    }
     const float cx = 0.5f * (w_ - 1), cy = 0.5f * (h_ - 1);
     const std::uint8_t* src = patch.data();
     for (int v = 0; v < h_; ++v) {
@@ -354,6 +366,15 @@ class Augmenter {
         const float top = src[y0 * w_ + x0] + fx * (src[y0 * w_ + x1] - src[y0 * w_ + x0]);
         const float bottom = src[y1 * w_ + x0] + fx * (src[y1 * w_ + x1] - src[y1 * w_ + x0]);
         out[v * w_ + u] = top + fy * (bottom - top);
+      }
+    }
+    if (u_lo > 0 || u_hi < w_ - 1 || v_lo > 0 || v_hi < h_ - 1) {
+      for (int v = 0; v < h_; ++v) {
+        const float* row = out + std::clamp(v, v_lo, v_hi) * w_;
+        float* dst = out + v * w_;
+        if (row != dst) std::copy(row, row + w_, dst);
+        for (int u = 0; u < u_lo; ++u) dst[u] = dst[u_lo];
+        for (int u = u_hi + 1; u < w_; ++u) dst[u] = dst[u_hi];
       }
     }
     const int n = w_ * h_;
@@ -604,6 +625,11 @@ TrainResult trainImpl(Net net, const std::vector<const Sample*>& train_set,
 }
 
 }  // namespace
+
+void augmentPatch(const GrayImage& patch, const AugmentationParams& params, bool flip_ok,
+                  std::mt19937_64& rng, float* out) {
+  Augmenter(patch.width(), patch.height(), params).apply(patch, flip_ok, rng, out);
+}
 
 TrainResult train(Net net, const Dataset& data, const TrainerParams& params,
                   const EpochCallback& on_epoch) {

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,12 @@ struct AugmentationParams {
   float blur_probability = 0.2f;  ///< chance of a [1 2 1]/4 blur in x and y
   float shift_px = 1.0f;          ///< translation, uniform in ±shift_px (patch pixels)
   float scale = 0.08f;            ///< zoom, uniform in 1 ± scale
+  /// Chance of an image-border cut: one side of the patch, from a depth uniform in
+  /// (0, border_cut_max_fraction] of the patch, is replaced by the last row or column before it,
+  /// the way `extractPatch` fills what lies beyond the image (an object cut by the border).
+  /// 0 draws nothing (the other augmentations' random draws stay as they were).
+  float border_cut_probability = 0.0f;
+  float border_cut_max_fraction = 0.5f;
   /// Per class (label order): may a patch of this class be mirrored left-right and keep its
   /// label? Empty = every class may.
   std::vector<bool> flip_allowed;
@@ -83,6 +90,12 @@ TrainResult train(Net net, const Dataset& data, const Dataset& validation,
 
 /// Classifies every sample of `data` (no augmentation) and scores it against the labels.
 Evaluation evaluate(const Net& net, const Dataset& data);
+
+/// One augmented copy of `patch` (grey values, width × height floats into `out`), drawn from `rng`
+/// exactly as training draws it; `flip_ok`: may it be mirrored. For looking at and testing the
+/// augmentation; training does the same without allocating.
+void augmentPatch(const GrayImage& patch, const AugmentationParams& params, bool flip_ok,
+                  std::mt19937_64& rng, float* out);
 
 /// Mean weighted softmax cross-entropy of `count` input tensors (net input layout) with their
 /// labels and weights, and its gradient with respect to every parameter (Net::params() order)
