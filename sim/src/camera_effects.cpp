@@ -94,6 +94,43 @@ FloatImage composeSubframes(const std::vector<GrayImage>& subframes, const Expos
   return out;
 }
 
+FloatImage smearAlong(const FloatImage& image, double step_x_px, double step_y_px) {
+  if (!std::isfinite(step_x_px) || !std::isfinite(step_y_px)) {
+    throw Error("camera effects: the smear step must be finite");
+  }
+  const double length = std::hypot(step_x_px, step_y_px);
+  if (length < 1.0 || image.width == 0 || image.height == 0) return image;
+  // The midpoints of equal parts of [-step/2, step/2], half a pixel long or less; bilinear.
+  const int samples = static_cast<int>(std::ceil(2.0 * length));
+  FloatImage out;
+  out.width = image.width;
+  out.height = image.height;
+  out.pixels.assign(image.pixels.size(), 0.0f);
+  const float max_x = static_cast<float>(image.width - 1), max_y = static_cast<float>(image.height - 1);
+  const float weight = 1.0f / static_cast<float>(samples);
+  for (int k = 0; k < samples; ++k) {
+    const double f = (k + 0.5) / samples - 0.5;
+    const float ox = static_cast<float>(f * step_x_px), oy = static_cast<float>(f * step_y_px);
+    for (int y = 0; y < image.height; ++y) {
+      const float sy = std::clamp(static_cast<float>(y) + oy, 0.0f, max_y);
+      const int y0 = static_cast<int>(sy), y1 = std::min(y0 + 1, image.height - 1);
+      const float fy = sy - static_cast<float>(y0);
+      const float* r0 = image.pixels.data() + static_cast<std::size_t>(y0) * image.width;
+      const float* r1 = image.pixels.data() + static_cast<std::size_t>(y1) * image.width;
+      float* dst = out.pixels.data() + static_cast<std::size_t>(y) * image.width;
+      for (int x = 0; x < image.width; ++x) {
+        const float sx = std::clamp(static_cast<float>(x) + ox, 0.0f, max_x);
+        const int x0 = static_cast<int>(sx), x1 = std::min(x0 + 1, image.width - 1);
+        const float fx = sx - static_cast<float>(x0);
+        const float top = r0[x0] + fx * (r0[x1] - r0[x0]);
+        const float bottom = r1[x0] + fx * (r1[x1] - r1[x0]);
+        dst[x] += weight * (top + fy * (bottom - top));
+      }
+    }
+  }
+  return out;
+}
+
 GrayImage applySensor(const FloatImage& exposure, const EffectsSpec& effects, std::uint64_t seed) {
   if (!std::isfinite(effects.gain) || effects.gain < 0 || !std::isfinite(effects.noise_sigma) ||
       effects.noise_sigma < 0 || !std::isfinite(effects.shot_noise) || effects.shot_noise < 0) {

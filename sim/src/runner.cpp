@@ -2,6 +2,8 @@
 
 #include <numbers>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "colorfree/perception/error.h"
 
@@ -130,6 +132,32 @@ void ScenarioRunner::setSceneAt(SceneRenderer& renderer, const CaseSettings& set
   renderer.setLighting(LightingState{lightingScaleAt(settings, frame_index, t_s)});
 }
 
+namespace {
+
+// How far the image centre's scene (far away: the camera's turn, not its travel) moves in the image
+// from one sub-frame to the next, averaged over the sub-frames.
+Eigen::Vector2d meanSubframeStepPx(const std::vector<std::pair<CameraModel, Eigen::Isometry3d>>& cams) {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  int steps = 0;
+  for (std::size_t j = 0; j + 1 < cams.size(); ++j) {
+    const auto& [model_a, field_a] = cams[j];
+    const auto& [model_b, field_b] = cams[j + 1];
+    const Eigen::Vector2d centre(0.5 * model_a.width(), 0.5 * model_a.height());
+    // Robot-frame ray of sub-frame j into the field, then into sub-frame j+1's robot frame.
+    const Eigen::Matrix3d robot_to_field_a = (field_a * model_a.cameraToRobot().inverse()).linear();
+    const Eigen::Matrix3d robot_to_field_b = (field_b * model_b.cameraToRobot().inverse()).linear();
+    const Eigen::Vector3d ray_b =
+        robot_to_field_b.transpose() * (robot_to_field_a * model_a.pixelRay(centre));
+    const auto pixel = model_b.robotToPixel(model_b.position() + 1000.0 * ray_b);
+    if (!pixel) continue;
+    sum += *pixel - centre;
+    ++steps;
+  }
+  return steps > 0 ? Eigen::Vector2d(sum / steps) : Eigen::Vector2d::Zero();
+}
+
+}  // namespace
+
 RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool object_map) {
   const CaseSettings& settings = scenarioCase(case_index).settings;
   if (frame_index < 0) throw Error(scenario_.path + ": negative frame index");
@@ -152,11 +180,17 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
     if (object_map) frame.truth.object_map = std::move(out.object_map);
   } else {
     std::vector<GrayImage> subframes;
+    std::vector<std::pair<CameraModel, Eigen::Isometry3d>> cameras;  // model, camera to field
     for (double dt : plan.subframeTimes()) {
       setSceneAt(renderer, settings, frame_index, t + dt);
       subframes.push_back(renderer.render(settings.camera, w, h, false).gray);
+      cameras.emplace_back(renderer.cameraModel(settings.camera, w, h),
+                           renderer.cameraToField(settings.camera));
     }
     exposure = composeSubframes(subframes, plan);
+    // The camera's own turn between sub-frames leaves gaps between their copies; fill them.
+    const Eigen::Vector2d step = meanSubframeStepPx(cameras);
+    exposure = smearAlong(exposure, step.x(), step.y());
     // The truth and the object map are at the frame time (the middle of the exposure).
     setSceneAt(renderer, settings, frame_index, t);
     if (object_map)

@@ -155,6 +155,37 @@ TEST(CameraEffectsTest, RollingShutterWithBlurWeightsRowsByOverlap) {
   }
 }
 
+TEST(CameraEffectsTest, SmearTurnsSubframeCopiesIntoOneContinuousStreak) {
+  // Four sub-frame copies of a bright point, 6 px apart (what composeSubframes makes of a camera
+  // turning 6 px per sub-frame): after the smear, one even streak from x = 17 to 41, no gaps.
+  FloatImage comb = flat(60, 9, 0.0f);
+  for (int k = 0; k < 4; ++k) comb.pixels[4 * 60 + 20 + 6 * k] = 100.0f;
+  const FloatImage s = smearAlong(comb, 6.0, 0.0);
+  double total = 0;
+  for (float v : s.pixels) total += v;
+  EXPECT_NEAR(total, 400.0, 1e-3);  // nothing lost, nothing added
+  for (int x = 18; x <= 40; ++x) {
+    EXPECT_NEAR(s.at(x, 4), 400.0 / 24.0, 4.0) << "x = " << x;  // even: no ghost left
+  }
+  for (int x = 0; x < 60; ++x) {
+    if (x < 16 || x > 42) {
+      EXPECT_EQ(s.at(x, 4), 0.0f) << "x = " << x;  // no longer than the motion
+    }
+    EXPECT_EQ(s.at(x, 3), 0.0f);                                        // and only along it
+    EXPECT_EQ(s.at(x, 5), 0.0f);
+  }
+  // Along a diagonal step the streak runs diagonally.
+  FloatImage dot = flat(30, 30, 0.0f);
+  dot.pixels[15 * 30 + 15] = 100.0f;
+  const FloatImage d = smearAlong(dot, 6.0, 6.0);
+  EXPECT_GT(d.at(17, 17), 5.0f);
+  EXPECT_GT(d.at(13, 13), 5.0f);
+  EXPECT_EQ(d.at(17, 13), 0.0f);
+  // Under a pixel nothing changes; a NaN step is an error.
+  EXPECT_EQ(smearAlong(comb, 0.6, 0.3).pixels, comb.pixels);
+  EXPECT_THROW(smearAlong(comb, std::nan(""), 0.0), Error);
+}
+
 TEST(CameraEffectsTest, ComposeRejectsMismatchedSubframes) {
   EffectsSpec e;
   e.exposure_s = 0.01;

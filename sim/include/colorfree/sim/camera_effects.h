@@ -50,6 +50,13 @@ inline constexpr int kMaxSubframes = 256;
 /// when the count or the sizes do not match the plan.
 FloatImage composeSubframes(const std::vector<GrayImage>& subframes, const ExposurePlan& plan);
 
+/// Box blur along `step_px` over its length (centred): what the gap between two consecutive
+/// sub-frames, `step_px` apart in the image, would have been filled with had the exposure been
+/// rendered continuously. composeSubframes' average of K sub-frames shifted by the step, smeared so,
+/// is a continuous smear of K steps instead of K ghost copies. Steps under a pixel change nothing;
+/// pixels beyond the image repeat the edge. Throws colorfree::Error for a non-finite step.
+FloatImage smearAlong(const FloatImage& image, double step_x_px, double step_y_px);
+
 /// Exposure/gain and sensor noise: value × gain, plus Gaussian noise of variance
 /// noise_sigma² + shot_noise × value, rounded and clipped to 0..255. `seed` fixes the noise.
 GrayImage applySensor(const FloatImage& exposure, const EffectsSpec& effects, std::uint64_t seed);
