@@ -12,7 +12,7 @@
 #include "colorfree/groundtruth/results.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/sim/scenario.h"
-#include "colorfree_git_version.h"
+#include "code_version.h"
 
 namespace colorfree::app {
 namespace {
@@ -96,7 +96,7 @@ BenchPlan loadBenchPlan(const std::string& list_path, bool quick) {
   plan.quick = quick;
   std::uint64_t hash = fnv1a(text);
   hash = fnv1a(quick ? "quick" : "full", hash);
-  hash = fnv1a(COLORFREE_GIT_DESCRIBE, hash);
+  hash = fnv1a(codeVersion(), hash);
   if (root["targets"]) {
     checkKeys(root["targets"], {"ball.detection_rate", "robot.detection_rate", "field_features.line_detection_rate",
                                 "field_features.intersection_detection_rate"},

@@ -27,7 +27,7 @@
 #include "colorfree/sim/runner.h"
 #include "colorfree/sim/scenario.h"
 #include "colorfree/sim/world_renderer.h"
-#include "colorfree_git_version.h"
+#include "code_version.h"
 #include "commands.h"
 #include "run_perception.h"
 
@@ -119,7 +119,7 @@ json runItems(const BenchPlan& plan, std::vector<WorkItem> items, const std::str
 
 json shardDocument(const BenchPlan& plan, int shard, int shards, const json& items, double wall_s) {
   return {{"format", kShardFormat}, {"plan", plan.toJson()}, {"shard", shard}, {"shards", shards},
-          {"code_version", COLORFREE_GIT_DESCRIBE}, {"wall_s", wall_s}, {"items", items}};
+          {"code_version", codeVersion()}, {"wall_s", wall_s}, {"items", items}};
 }
 
 json readJsonFile(const std::string& path) {
@@ -184,7 +184,7 @@ MergedBench mergeShards(const std::vector<json>& docs, const std::vector<std::st
     const BenchExperiment& e = plan.experiments[x];
     Scorer scorer(scoringFor(e), dims);
     for (int c = 0; c < e.cases; ++c) scorer.addCaseStates(by_item.at(itemName(plan, {x, c, 0})).at("state"));
-    RunInfo run{e.scenario_name, e.seed, COLORFREE_GIT_DESCRIBE};
+    RunInfo run{e.scenario_name, e.seed, codeVersion()};
     json r = scorer.results(run);
     frames += scorer.frameCount();
     std::vector<Expectation> expectations;
@@ -210,7 +210,7 @@ MergedBench mergeShards(const std::vector<json>& docs, const std::vector<std::st
   results["format"] = "colorfree-bench/1";
   results["bench"] = {{"list", plan.list_path},
                       {"quick", plan.quick},
-                      {"code_version", COLORFREE_GIT_DESCRIBE},
+                      {"code_version", codeVersion()},
                       {"frames", frames},
                       {"targets", plan.targets},
                       {"wall_s", wall_s}};

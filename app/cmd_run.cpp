@@ -14,7 +14,7 @@
 #include "colorfree/sim/runner.h"
 #include "colorfree/sim/scenario.h"
 #include "colorfree/sim/world_renderer.h"
-#include "colorfree_git_version.h"
+#include "code_version.h"
 #include "commands.h"
 #include "progress_bar.h"
 #include "run_perception.h"
@@ -170,7 +170,7 @@ void addRunCommand(CLI::App& app, int& exit_code) {
     RunInfo run;
     run.scenario = scenario.name;
     run.seed = scenario.cases.front().settings.seed;
-    run.code_version = COLORFREE_GIT_DESCRIBE;
+    run.code_version = codeVersion();
     nlohmann::json results = scorer.results(run);
     const auto failures = checkExpectations(expectations, results);
     std::vector<ExpectationLine> lines;

@@ -2,6 +2,7 @@
 // true ball, every ball proposal (distance to the truth, match, both nets' scores) and the
 // percepts, so a miss can be traced to the proposer or to the nets.
 //   ball_probe SCENARIO [frames_per_case] [case] [png_dir]
+// BP_MODELS=DIR takes the nets from DIR; BP_TEXTURE=... and the others below override parameters.
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -50,6 +51,7 @@ int probe(int argc, char** argv) {
   env("BP_BODY", config.ball_proposer.robot_body_factor);
   env("BP_OFFAXIS", config.ball_proposer.off_axis_exponent);
   env("BP_STEP", config.ball_proposer.step_fraction);
+  if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
   const Pipeline pipeline(config);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
   int truths = 0, prop_hits = 0, hits = 0, fps = 0;
