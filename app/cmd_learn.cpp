@@ -58,7 +58,8 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--patience", o->patience, "early stopping patience, epochs")->capture_default_str();
   cmd->add_option("--seed", o->seed, "trainer seed")->capture_default_str();
   cmd->add_option("--border-cut", o->border_cut,
-                  "augmentation: chance of cutting a patch as the image border cuts an object (0..1)")
+                  "augmentation: chance of cutting a patch as the image border cuts an object (0..1; up to 0.6 of "
+                  "the patch deep, 30 % of the cuts at a corner)")
       ->capture_default_str();
   cmd->add_option("--dataset", o->dataset, "dataset folder to write (one sub-folder per net)")->capture_default_str();
   cmd->add_option("--models", o->models, "model folder: cfgs read, weights written (default: perception/models)");
@@ -99,6 +100,8 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     config.trainer.patience_epochs = o->patience;
     config.trainer.seed = o->seed;
     config.trainer.augmentation.border_cut_probability = o->border_cut;
+    config.trainer.augmentation.border_cut_max_fraction = 0.6f;        // a ball half out of the image, and more
+    config.trainer.augmentation.border_cut_corner_probability = 0.3f;  // cut at an image corner
     const training::ObjectKind& kind = *kind_ptr;
     const auto result = training::learn(kind, config, [o](const std::string& line) {
       if (!o->quiet) std::printf("%s\n", line.c_str());

@@ -52,6 +52,7 @@ int probe(int argc, char** argv) {
   env("BP_OFFAXIS", config.ball_proposer.off_axis_exponent);
   env("BP_STEP", config.ball_proposer.step_fraction);
   if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
+  if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
   const Pipeline pipeline(config);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
   int truths = 0, prop_hits = 0, hits = 0, fps = 0;

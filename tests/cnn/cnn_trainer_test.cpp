@@ -184,6 +184,31 @@ TEST(CnnTrainer, BorderCutRepeatsTheEdgeRowOrColumnOnOneSide) {
     ASSERT_EQ(matches, 1) << "trial " << trial;
   }
   EXPECT_EQ(cuts_seen.size(), 24u);  // every side, every depth 1..6
+  // Corners: with the corner share at 1, every cut is on two adjacent sides, each with its depth.
+  p.border_cut_corner_probability = 1.0f;
+  for (int trial = 0; trial < 100; ++trial) {
+    std::vector<float> out(144);
+    augmentPatch(patch, p, false, rng, out.data());
+    int matches = 0;
+    for (int lr = 0; lr < 2; ++lr) {
+      for (int tb = 2; tb < 4; ++tb) {
+        for (int du = 1; du <= 6; ++du) {
+          for (int dv = 1; dv <= 6; ++dv) {
+            bool same = true;
+            for (int y = 0; y < 12 && same; ++y) {
+              for (int x = 0; x < 12 && same; ++x) {
+                const int sx = lr == 0 ? std::max(x, du) : std::min(x, 11 - du);
+                const int sy = tb == 2 ? std::max(y, dv) : std::min(y, 11 - dv);
+                same = out[y * 12 + x] == static_cast<float>(patch.at(sx, sy));
+              }
+            }
+            matches += same;
+          }
+        }
+      }
+    }
+    ASSERT_EQ(matches, 1) << "trial " << trial;
+  }
   // Probability 0: never cut.
   p.border_cut_probability = 0.0f;
   std::vector<float> out(144);

@@ -343,14 +343,22 @@ class Augmenter {
     // Border cut: keep rows/columns [lo, hi] on one side, replicate the edge one beyond them.
     int u_lo = 0, u_hi = w_ - 1, v_lo = 0, v_hi = h_ - 1;
     if (p_.border_cut_probability > 0.0f && unit(rng) < p_.border_cut_probability) {
+      const auto cut = [&](int side) {
+        const float depth = p_.border_cut_max_fraction * (1.0f - unit(rng));  // (0, max]
+        const int cut_u = std::clamp(static_cast<int>(depth * w_ + 0.5f), 1, w_ - 1);
+        const int cut_v = std::clamp(static_cast<int>(depth * h_ + 0.5f), 1, h_ - 1);
+        if (side == 0) u_lo = cut_u;
+        if (side == 1) u_hi = w_ - 1 - cut_u;
+        if (side == 2) v_lo = cut_v;
+        if (side == 3) v_hi = h_ - 1 - cut_v;
+      };
       const int side = static_cast<int>(unit(rng) * 4.0f) & 3;
-      const float depth = p_.border_cut_max_fraction * (1.0f - unit(rng));  // (0, max]
-      const int cut_u = std::clamp(static_cast<int>(depth * w_ + 0.5f), 1, w_ - 1);
-      const int cut_v = std::clamp(static_cast<int>(depth * h_ + 0.5f), 1, h_ - 1);
-      if (side == 0) u_lo = cut_u;
-      if (side == 1) u_hi = w_ - 1 - cut_u;
-      if (side == 2) v_lo = cut_v;
-      if (side == 3) v_hi = h_ - 1 - cut_v;
+      cut(side);
+      if (p_.border_cut_corner_probability > 0.0f && unit(rng) < p_.border_cut_corner_probability) {
+        // The adjacent side: a left/right cut gets a top/bottom one and the other way round.
+        const int other = (side < 2 ? 2 : 0) + (unit(rng) < 0.5f ? 0 : 1);
+        cut(other);
+      }
     }
     const float cx = 0.5f * (w_ - 1), cy = 0.5f * (h_ - 1);
     const std::uint8_t* src = patch.data();
@@ -369,12 +377,14 @@ class Augmenter {
       }
     }
     if (u_lo > 0 || u_hi < w_ - 1 || v_lo > 0 || v_hi < h_ - 1) {
-      for (int v = 0; v < h_; ++v) {
-        const float* row = out + std::clamp(v, v_lo, v_hi) * w_;
+      for (int v = v_lo; v <= v_hi; ++v) {  // columns first, on the rows kept ...
         float* dst = out + v * w_;
-        if (row != dst) std::copy(row, row + w_, dst);
         for (int u = 0; u < u_lo; ++u) dst[u] = dst[u_lo];
         for (int u = u_hi + 1; u < w_; ++u) dst[u] = dst[u_hi];
+      }
+      for (int v = 0; v < h_; ++v) {  // ... then the rows beyond the cut copy the nearest kept one
+        const float* row = out + std::clamp(v, v_lo, v_hi) * w_;
+        if (v < v_lo || v > v_hi) std::copy(row, row + w_, out + v * w_);
       }
     }
     const int n = w_ * h_;

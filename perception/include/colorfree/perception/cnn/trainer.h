@@ -25,6 +25,8 @@ struct AugmentationParams {
   /// 0 draws nothing (the other augmentations' random draws stay as they were).
   float border_cut_probability = 0.0f;
   float border_cut_max_fraction = 0.5f;
+  /// Of the cut patches, the share cut on a second, adjacent side too (an image corner).
+  float border_cut_corner_probability = 0.0f;
   /// Per class (label order): may a patch of this class be mirrored left-right and keep its
   /// label? Empty = every class may.
   std::vector<bool> flip_allowed;
