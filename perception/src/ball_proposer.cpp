@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/param_file.h"
@@ -62,56 +63,51 @@ struct Candidate {
   float x, y, r, response;
 };
 
-// An integral image over a region of interest: sums of any box inside the image, with the box
-// clamped to the region (which covers every box the scan asks for, clamped to the image).
-class Integral {
+// Two integral images over a region of interest in one interleaved buffer (entry 2 k: grey level,
+// 2 k + 1: edge strength |right - here| + |below - here|: the ball's print is full of edges, carpet,
+// lines and robots' feet have few): sums of any box inside the region; boxes are clamped to it
+// (it covers every box the scan asks for, clamped to the image). Each entry is written once, none
+// is cleared first.
+class Integrals {
  public:
-  // `edges`: the integral of the pixel's edge strength |right - here| + |below - here| instead of
-  // its grey level (the ball's print is full of edges; carpet, lines and robots' feet have few).
-  Integral(const GrayView& image, int x0, int y0, int x1, int y1, bool edges = false)
-      : x0_(x0), y0_(y0), w_(x1 - x0), h_(y1 - y0), stride_(w_ + 1),
-        sums_(static_cast<std::size_t>(stride_) * (h_ + 1), 0u) {
+  Integrals(const GrayView& image, int x0, int y0, int x1, int y1)
+      : x0_(x0), y0_(y0), w_(x1 - x0), h_(y1 - y0), stride_(2 * (w_ + 1)),
+        sums_(new std::uint32_t[static_cast<std::size_t>(stride_) * (h_ + 1)]) {
+    std::fill(sums_.get(), sums_.get() + stride_, 0u);
+    std::vector<std::uint16_t> edge(static_cast<std::size_t>(w_));
+    // The last column's right neighbour: the pixel beyond the region, or itself at the image border.
+    const int last = x0 + w_ < image.width ? w_ : w_ - 1;
     for (int y = 0; y < h_; ++y) {
       const std::uint8_t* src = image.row(y0 + y) + x0;
       const std::uint8_t* below = image.row(std::min(y0 + y + 1, image.height - 1)) + x0;
-      const std::uint32_t* above = sums_.data() + static_cast<std::size_t>(y) * stride_;
-      std::uint32_t* out = sums_.data() + static_cast<std::size_t>(y + 1) * stride_;
-      std::uint32_t run = 0;
-      if (!edges) {
-        for (int x = 0; x < w_; ++x) {
-          run += src[x];
-          out[x + 1] = above[x + 1] + run;
-        }
-      } else {
-        const int last = x0 + w_ < image.width ? w_ : w_ - 1;
-        for (int x = 0; x < w_; ++x) {
-          const int right = x < last ? src[x + 1] : src[x];
-          run += static_cast<std::uint32_t>(std::abs(right - src[x]) + std::abs(below[x] - src[x]));
-          out[x + 1] = above[x + 1] + run;
-        }
+      for (int x = 0; x < last; ++x) {
+        edge[x] = static_cast<std::uint16_t>(std::abs(src[x + 1] - src[x]) + std::abs(below[x] - src[x]));
+      }
+      for (int x = last; x < w_; ++x) edge[x] = static_cast<std::uint16_t>(std::abs(below[x] - src[x]));
+      const std::uint32_t* above = sums_.get() + static_cast<std::size_t>(y) * stride_;
+      std::uint32_t* out = sums_.get() + static_cast<std::size_t>(y + 1) * stride_;
+      out[0] = out[1] = 0;
+      std::uint32_t run = 0, run_edge = 0;
+      for (int x = 0; x < w_; ++x) {
+        run += src[x];
+        run_edge += edge[x];
+        out[2 * x + 2] = above[2 * x + 2] + run;
+        out[2 * x + 3] = above[2 * x + 3] + run_edge;
       }
     }
   }
-  // Mean over the box [x0, x1) x [y0, y1) (clamped into the region); 0 for an empty box.
-  float mean(int x0, int y0, int x1, int y1) const {
-    x0 = clampX(x0), x1 = clampX(x1), y0 = clampY(y0), y1 = clampY(y1);
-    const int area = (x1 - x0) * (y1 - y0);
-    if (area <= 0) return 0.f;
-    return static_cast<float>(at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0)) / static_cast<float>(area);
-  }
-  // Integral value at image coordinates (x, y) (the sum of pixels left of x and above y),
-  // coordinates clamped into the region.
-  std::uint32_t at(int x, int y) const {
-    x = std::clamp(x - x0_, 0, w_);
-    y = std::clamp(y - y0_, 0, h_);
-    return sums_[static_cast<std::size_t>(y) * stride_ + x];
-  }
+  // The row of integral values at image row y (clamped into the region); entry col(x) is the grey
+  // level's sum left of x and above y, col(x) + 1 the edge strength's.
+  const std::uint32_t* row(int y) const { return sums_.get() + static_cast<std::size_t>(clampY(y) - y0_) * stride_; }
+  int col(int x) const { return 2 * (clampX(x) - x0_); }
+  // Grey-level integral at image coordinates (x, y), clamped into the region.
+  std::uint32_t at(int x, int y) const { return row(y)[col(x)]; }
   int clampX(int x) const { return std::clamp(x, x0_, x0_ + w_); }
   int clampY(int y) const { return std::clamp(y, y0_, y0_ + h_); }
 
  private:
   int x0_, y0_, w_, h_, stride_;
-  std::vector<std::uint32_t> sums_;
+  std::unique_ptr<std::uint32_t[]> sums_;
 };
 
 // The response at (x, y) for expected radius r: a 3×3 grid of cells, the centre cell the inner box.
@@ -145,14 +141,16 @@ Scale scaleAt(double r, const BallProposerParams& p) {
   return s;
 }
 
-float response(const Integral& ii, const Integral& ei, int x, int y, const Scale& sc, const BallProposerParams& p,
+float response(const Integrals& ii, int x, int y, const Scale& sc, const BallProposerParams& p,
                float* on_line = nullptr) {
   const int a = sc.a, b = sc.b;
   const int xs[4] = {ii.clampX(x - b), ii.clampX(x - a), ii.clampX(x + a), ii.clampX(x + b)};
   const int ys[4] = {ii.clampY(y - b), ii.clampY(y - a), ii.clampY(y + a), ii.clampY(y + b)};
+  const int cols[4] = {ii.col(xs[0]), ii.col(xs[1]), ii.col(xs[2]), ii.col(xs[3])};
+  const std::uint32_t* rows[4] = {ii.row(ys[0]), ii.row(ys[1]), ii.row(ys[2]), ii.row(ys[3])};
   std::uint32_t v[4][4];
   for (int j = 0; j < 4; ++j) {
-    for (int i = 0; i < 4; ++i) v[j][i] = ii.at(xs[i], ys[j]);
+    for (int i = 0; i < 4; ++i) v[j][i] = rows[j][cols[i]];
   }
   float mean[3][3];
   bool valid[3][3];
@@ -193,7 +191,9 @@ float response(const Integral& ii, const Integral& ei, int x, int y, const Scale
   surround = std::max(surround, ring);
   float dog = mean[1][1] - surround;
   if (sc.texture_gain > 0) {
-    const float texture = sc.texture_gain * ei.mean(xs[1], ys[1], xs[2], ys[2]);
+    const std::uint32_t edge_sum = rows[2][cols[2] + 1] - rows[1][cols[2] + 1] - rows[2][cols[1] + 1] + rows[1][cols[1] + 1];
+    const int inner_area = (xs[2] - xs[1]) * (ys[2] - ys[1]);
+    const float texture = sc.texture_gain * (static_cast<float>(edge_sum) / static_cast<float>(inner_area));
     dog += texture;
     if (on_line) *on_line += texture;
   }
@@ -333,8 +333,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   ry0 = std::max(ry0, 0);
   rx1 = std::min(rx1, image.width);
   ry1 = std::min(ry1, image.height);
-  const Integral ii(image, rx0, ry0, rx1, ry1);
-  const Integral ei(image, rx0, ry0, rx1, ry1, true);
+  const Integrals ii(image, rx0, ry0, rx1, ry1);
 
   std::vector<Candidate> candidates;
   std::vector<Candidate> line_candidates;
@@ -366,7 +365,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       for (int x = x_start; x < rc.x1; x += step) {
         if (!ignore.looked(x, yy)) continue;
         float line_resp = 0;
-        const float resp = response(ii, ei, x, yy, scale, p, &line_resp) * static_cast<float>(rc.boost);
+        const float resp = response(ii, x, yy, scale, p, &line_resp) * static_cast<float>(rc.boost);
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }
