@@ -219,28 +219,98 @@ float response(const Integrals& ii, int x, int y, const Scale& sc, const BallPro
   return dog;
 }
 
+// response() where no box needs clamping (every box of the row inside the region): the same
+// arithmetic, with the row's four integral rows and the cells' areas prepared once per scan row.
+struct RowBoxes {
+  const std::uint32_t* rows[4];  // integral rows at y - b, y - a, y + a, y + b
+  int da, db;                    // 2 a, 2 b: the boxes' offsets in interleaved entries
+  float area[9];                 // the 3x3 cells, row-major
+  float ring_area, inner_area;
+};
+
+RowBoxes rowBoxes(const Integrals& ii, int y, const Scale& sc) {
+  RowBoxes g;
+  const int a = sc.a, b = sc.b;
+  const int ys[4] = {y - b, y - a, y + a, y + b};
+  for (int j = 0; j < 4; ++j) g.rows[j] = ii.row(ys[j]);
+  g.da = 2 * a;
+  g.db = 2 * b;
+  const int side[3] = {b - a, 2 * a, b - a};
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) g.area[3 * j + i] = static_cast<float>(side[i] * side[j]);
+  }
+  g.ring_area = static_cast<float>((2 * b) * (2 * b) - (2 * a) * (2 * a));
+  g.inner_area = static_cast<float>((2 * a) * (2 * a));
+  return g;
+}
+
+inline float responseInside(const RowBoxes& g, int col, float texture_gain, float* on_line) {
+  const int cols[4] = {col - g.db, col - g.da, col + g.da, col + g.db};
+  std::uint32_t v[4][4];
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 4; ++i) v[j][i] = g.rows[j][cols[i]];
+  }
+  std::uint32_t sums[9];
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) sums[3 * j + i] = v[j + 1][i + 1] - v[j][i + 1] - v[j + 1][i] + v[j][i];
+  }
+  float mean[9];
+  for (int k = 0; k < 9; ++k) mean[k] = static_cast<float>(sums[k]) / g.area[k];
+  // The pairs of response(), all valid here: left-right, top-bottom, the two diagonals.
+  const int pairs[4][2] = {{3, 5}, {1, 7}, {0, 8}, {2, 6}};
+  float surround = -1e9f, second = -1e9f;
+  for (const auto& q : pairs) {
+    const float m = std::min(mean[q[0]], mean[q[1]]);
+    if (m > surround) {
+      second = surround;
+      surround = m;
+    } else if (m > second) {
+      second = m;
+    }
+  }
+  *on_line = mean[4] - second;
+  const std::uint32_t outer_sum = v[3][3] - v[0][3] - v[3][0] + v[0][0];
+  const float ring = static_cast<float>(outer_sum - sums[4]) / g.ring_area;
+  surround = std::max(surround, ring);
+  float dog = mean[4] - surround;
+  if (texture_gain > 0) {
+    const std::uint32_t edge_sum = g.rows[2][cols[2] + 1] - g.rows[1][cols[2] + 1] - g.rows[2][cols[1] + 1] + g.rows[1][cols[1] + 1];
+    const float texture = texture_gain * (static_cast<float>(edge_sum) / g.inner_area);
+    dog += texture;
+    *on_line += texture;
+  }
+  return dog;
+}
+
 // Circle-centre voting around (x, y): every pixel within the outline's reach whose gradient is
 // strong votes for the points r along its gradient, both ways (the ball is brighter than the
 // carpet, or darker when the carpet is overexposed), over radii (1 ± radius_tolerance) r; the votes
 // are accumulated on a grid of cells about r / 8 wide within centre_search_fraction r of (x, y) and
 // smoothed over 3x3 cells. Returns (x, y) when no cell gets votes.
-Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p) {
+// `acc` is scratch space (reused between calls).
+Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p,
+                                std::vector<float>& acc) {
   const double search = p.centre_search_fraction * r;
   if (search < 1) return {x, y};
   const int cell = std::max(1, static_cast<int>(r / 8));
   const int half = static_cast<int>(std::ceil(search / cell));
   const int n = 2 * half + 1;
-  std::vector<float> acc(static_cast<std::size_t>(n) * n, 0.f);
+  acc.assign(static_cast<std::size_t>(n) * n, 0.f);
   const double reach = search + (1 + p.radius_tolerance) * r + 1;
   const int x0 = std::max(1, static_cast<int>(x - reach)), x1 = std::min(image.width - 2, static_cast<int>(x + reach));
   const int y0 = std::max(1, static_cast<int>(y - reach)), y1 = std::min(image.height - 2, static_cast<int>(y + reach));
   const double radii[3] = {(1 - p.radius_tolerance) * r, r, (1 + p.radius_tolerance) * r};
   const float min_grad = static_cast<float>(p.min_gradient);
+  // g2 below is (dx^2 + dy^2) / 4 for the integer differences dx, dy, exactly (all terms are small
+  // multiples of 1/4): the same test on the integers first, for the many weak pixels.
+  const float min_d2 = 4 * (min_grad * min_grad);
   for (int py = y0; py <= y1; py += cell) {
     const std::uint8_t* up = image.row(py - 1);
     const std::uint8_t* row = image.row(py);
     const std::uint8_t* down = image.row(py + 1);
     for (int px = x0; px <= x1; px += cell) {
+      const int dx = row[px + 1] - row[px - 1], dy = down[px] - up[px];
+      if (static_cast<float>(dx * dx + dy * dy) < min_d2) continue;
       const float gx = 0.5f * (static_cast<float>(row[px + 1]) - row[px - 1]);
       const float gy = 0.5f * (static_cast<float>(down[px]) - up[px]);
       const float g2 = gx * gx + gy * gy;
@@ -362,10 +432,16 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       const Scale scale = scaleAt(r, p);
       const int x_start = rc.x0 + (step - 1) / 2;
       const int yy = std::min(y + (step - 1) / 2, rc.y1 - 1);
+      // No box of this row needs clamping: the fast path (the print term needs the general one).
+      const bool inside = p.print_weight <= 0 && x_start - scale.b >= rx0 && rc.x1 - 1 + scale.b <= rx1 &&
+                          yy - scale.b >= ry0 && yy + scale.b <= ry1;
+      const RowBoxes boxes = inside ? rowBoxes(ii, yy, scale) : RowBoxes{};
       for (int x = x_start; x < rc.x1; x += step) {
         if (!ignore.looked(x, yy)) continue;
         float line_resp = 0;
-        const float resp = response(ii, x, yy, scale, p, &line_resp) * static_cast<float>(rc.boost);
+        const float resp = (inside ? responseInside(boxes, ii.col(x), scale.texture_gain, &line_resp)
+                                   : response(ii, x, yy, scale, p, &line_resp)) *
+                           static_cast<float>(rc.boost);
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }
@@ -410,6 +486,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   std::stable_sort(line_candidates.begin(), line_candidates.end(), by_response);
   std::vector<BallProposal> out;
   std::vector<Eigen::Vector2d> raw_centres;  // the scan's positions of the proposals in `out`
+  std::vector<float> votes;                  // centreFromEdges' scratch
   const auto near = [&](double x, double y, double r) {
     for (std::size_t k = 0; k < out.size(); ++k) {
       const double d = p.nms_fraction * std::max<double>(r, out[k].radius_px);
@@ -426,7 +503,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       if (near(c.x, c.y, c.r)) continue;
       // The centre: where the outline's gradients point to at the expected radius (robust to the
       // shading of the ball's lower half and to its shadow, which pull the DoG's peak upwards).
-      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p);
+      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p, votes);
       if (near(centre.x(), centre.y(), c.r)) continue;  // the same ball as an earlier one
       BallProposal prop;
       prop.centre_px = centre;
