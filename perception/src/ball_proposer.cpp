@@ -320,9 +320,11 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
       for (const double rr : radii) {
         for (const double sign : {1.0, -1.0}) {
           const double cx = px + 0.5 + sign * rr * ux - x, cy = py + 0.5 + sign * rr * uy - y;
-          const int i = static_cast<int>(std::floor(cx / cell + 0.5)) + half;
-          const int j = static_cast<int>(std::floor(cy / cell + 0.5)) + half;
-          if (i < 0 || j < 0 || i >= n || j >= n) continue;
+          // (a division by 1 changes nothing: skipped for the small radii's one-pixel cells)
+          const int i = static_cast<int>(std::floor((cell == 1 ? cx : cx / cell) + 0.5)) + half;
+          if (i < 0 || i >= n) continue;
+          const int j = static_cast<int>(std::floor((cell == 1 ? cy : cy / cell) + 0.5)) + half;
+          if (j < 0 || j >= n) continue;
           acc[static_cast<std::size_t>(j) * n + i] += g;
         }
       }
