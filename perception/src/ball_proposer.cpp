@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/param_file.h"
@@ -62,56 +63,51 @@ struct Candidate {
   float x, y, r, response;
 };
 
-// An integral image over a region of interest: sums of any box inside the image, with the box
-// clamped to the region (which covers every box the scan asks for, clamped to the image).
-class Integral {
+// Two integral images over a region of interest in one interleaved buffer (entry 2 k: grey level,
+// 2 k + 1: edge strength |right - here| + |below - here|: the ball's print is full of edges, carpet,
+// lines and robots' feet have few): sums of any box inside the region; boxes are clamped to it
+// (it covers every box the scan asks for, clamped to the image). Each entry is written once, none
+// is cleared first.
+class Integrals {
  public:
-  // `edges`: the integral of the pixel's edge strength |right - here| + |below - here| instead of
-  // its grey level (the ball's print is full of edges; carpet, lines and robots' feet have few).
-  Integral(const GrayView& image, int x0, int y0, int x1, int y1, bool edges = false)
-      : x0_(x0), y0_(y0), w_(x1 - x0), h_(y1 - y0), stride_(w_ + 1),
-        sums_(static_cast<std::size_t>(stride_) * (h_ + 1), 0u) {
+  Integrals(const GrayView& image, int x0, int y0, int x1, int y1)
+      : x0_(x0), y0_(y0), w_(x1 - x0), h_(y1 - y0), stride_(2 * (w_ + 1)),
+        sums_(new std::uint32_t[static_cast<std::size_t>(stride_) * (h_ + 1)]) {
+    std::fill(sums_.get(), sums_.get() + stride_, 0u);
+    std::vector<std::uint16_t> edge(static_cast<std::size_t>(w_));
+    // The last column's right neighbour: the pixel beyond the region, or itself at the image border.
+    const int last = x0 + w_ < image.width ? w_ : w_ - 1;
     for (int y = 0; y < h_; ++y) {
       const std::uint8_t* src = image.row(y0 + y) + x0;
       const std::uint8_t* below = image.row(std::min(y0 + y + 1, image.height - 1)) + x0;
-      const std::uint32_t* above = sums_.data() + static_cast<std::size_t>(y) * stride_;
-      std::uint32_t* out = sums_.data() + static_cast<std::size_t>(y + 1) * stride_;
-      std::uint32_t run = 0;
-      if (!edges) {
-        for (int x = 0; x < w_; ++x) {
-          run += src[x];
-          out[x + 1] = above[x + 1] + run;
-        }
-      } else {
-        const int last = x0 + w_ < image.width ? w_ : w_ - 1;
-        for (int x = 0; x < w_; ++x) {
-          const int right = x < last ? src[x + 1] : src[x];
-          run += static_cast<std::uint32_t>(std::abs(right - src[x]) + std::abs(below[x] - src[x]));
-          out[x + 1] = above[x + 1] + run;
-        }
+      for (int x = 0; x < last; ++x) {
+        edge[x] = static_cast<std::uint16_t>(std::abs(src[x + 1] - src[x]) + std::abs(below[x] - src[x]));
+      }
+      for (int x = last; x < w_; ++x) edge[x] = static_cast<std::uint16_t>(std::abs(below[x] - src[x]));
+      const std::uint32_t* above = sums_.get() + static_cast<std::size_t>(y) * stride_;
+      std::uint32_t* out = sums_.get() + static_cast<std::size_t>(y + 1) * stride_;
+      out[0] = out[1] = 0;
+      std::uint32_t run = 0, run_edge = 0;
+      for (int x = 0; x < w_; ++x) {
+        run += src[x];
+        run_edge += edge[x];
+        out[2 * x + 2] = above[2 * x + 2] + run;
+        out[2 * x + 3] = above[2 * x + 3] + run_edge;
       }
     }
   }
-  // Mean over the box [x0, x1) x [y0, y1) (clamped into the region); 0 for an empty box.
-  float mean(int x0, int y0, int x1, int y1) const {
-    x0 = clampX(x0), x1 = clampX(x1), y0 = clampY(y0), y1 = clampY(y1);
-    const int area = (x1 - x0) * (y1 - y0);
-    if (area <= 0) return 0.f;
-    return static_cast<float>(at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0)) / static_cast<float>(area);
-  }
-  // Integral value at image coordinates (x, y) (the sum of pixels left of x and above y),
-  // coordinates clamped into the region.
-  std::uint32_t at(int x, int y) const {
-    x = std::clamp(x - x0_, 0, w_);
-    y = std::clamp(y - y0_, 0, h_);
-    return sums_[static_cast<std::size_t>(y) * stride_ + x];
-  }
+  // The row of integral values at image row y (clamped into the region); entry col(x) is the grey
+  // level's sum left of x and above y, col(x) + 1 the edge strength's.
+  const std::uint32_t* row(int y) const { return sums_.get() + static_cast<std::size_t>(clampY(y) - y0_) * stride_; }
+  int col(int x) const { return 2 * (clampX(x) - x0_); }
+  // Grey-level integral at image coordinates (x, y), clamped into the region.
+  std::uint32_t at(int x, int y) const { return row(y)[col(x)]; }
   int clampX(int x) const { return std::clamp(x, x0_, x0_ + w_); }
   int clampY(int y) const { return std::clamp(y, y0_, y0_ + h_); }
 
  private:
   int x0_, y0_, w_, h_, stride_;
-  std::vector<std::uint32_t> sums_;
+  std::unique_ptr<std::uint32_t[]> sums_;
 };
 
 // The response at (x, y) for expected radius r: a 3×3 grid of cells, the centre cell the inner box.
@@ -145,14 +141,16 @@ Scale scaleAt(double r, const BallProposerParams& p) {
   return s;
 }
 
-float response(const Integral& ii, const Integral& ei, int x, int y, const Scale& sc, const BallProposerParams& p,
+float response(const Integrals& ii, int x, int y, const Scale& sc, const BallProposerParams& p,
                float* on_line = nullptr) {
   const int a = sc.a, b = sc.b;
   const int xs[4] = {ii.clampX(x - b), ii.clampX(x - a), ii.clampX(x + a), ii.clampX(x + b)};
   const int ys[4] = {ii.clampY(y - b), ii.clampY(y - a), ii.clampY(y + a), ii.clampY(y + b)};
+  const int cols[4] = {ii.col(xs[0]), ii.col(xs[1]), ii.col(xs[2]), ii.col(xs[3])};
+  const std::uint32_t* rows[4] = {ii.row(ys[0]), ii.row(ys[1]), ii.row(ys[2]), ii.row(ys[3])};
   std::uint32_t v[4][4];
   for (int j = 0; j < 4; ++j) {
-    for (int i = 0; i < 4; ++i) v[j][i] = ii.at(xs[i], ys[j]);
+    for (int i = 0; i < 4; ++i) v[j][i] = rows[j][cols[i]];
   }
   float mean[3][3];
   bool valid[3][3];
@@ -193,7 +191,9 @@ float response(const Integral& ii, const Integral& ei, int x, int y, const Scale
   surround = std::max(surround, ring);
   float dog = mean[1][1] - surround;
   if (sc.texture_gain > 0) {
-    const float texture = sc.texture_gain * ei.mean(xs[1], ys[1], xs[2], ys[2]);
+    const std::uint32_t edge_sum = rows[2][cols[2] + 1] - rows[1][cols[2] + 1] - rows[2][cols[1] + 1] + rows[1][cols[1] + 1];
+    const int inner_area = (xs[2] - xs[1]) * (ys[2] - ys[1]);
+    const float texture = sc.texture_gain * (static_cast<float>(edge_sum) / static_cast<float>(inner_area));
     dog += texture;
     if (on_line) *on_line += texture;
   }
@@ -219,28 +219,98 @@ float response(const Integral& ii, const Integral& ei, int x, int y, const Scale
   return dog;
 }
 
+// response() where no box needs clamping (every box of the row inside the region): the same
+// arithmetic, with the row's four integral rows and the cells' areas prepared once per scan row.
+struct RowBoxes {
+  const std::uint32_t* rows[4];  // integral rows at y - b, y - a, y + a, y + b
+  int da, db;                    // 2 a, 2 b: the boxes' offsets in interleaved entries
+  float area[9];                 // the 3x3 cells, row-major
+  float ring_area, inner_area;
+};
+
+RowBoxes rowBoxes(const Integrals& ii, int y, const Scale& sc) {
+  RowBoxes g;
+  const int a = sc.a, b = sc.b;
+  const int ys[4] = {y - b, y - a, y + a, y + b};
+  for (int j = 0; j < 4; ++j) g.rows[j] = ii.row(ys[j]);
+  g.da = 2 * a;
+  g.db = 2 * b;
+  const int side[3] = {b - a, 2 * a, b - a};
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) g.area[3 * j + i] = static_cast<float>(side[i] * side[j]);
+  }
+  g.ring_area = static_cast<float>((2 * b) * (2 * b) - (2 * a) * (2 * a));
+  g.inner_area = static_cast<float>((2 * a) * (2 * a));
+  return g;
+}
+
+inline float responseInside(const RowBoxes& g, int col, float texture_gain, float* on_line) {
+  const int cols[4] = {col - g.db, col - g.da, col + g.da, col + g.db};
+  std::uint32_t v[4][4];
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 4; ++i) v[j][i] = g.rows[j][cols[i]];
+  }
+  std::uint32_t sums[9];
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) sums[3 * j + i] = v[j + 1][i + 1] - v[j][i + 1] - v[j + 1][i] + v[j][i];
+  }
+  float mean[9];
+  for (int k = 0; k < 9; ++k) mean[k] = static_cast<float>(sums[k]) / g.area[k];
+  // The pairs of response(), all valid here: left-right, top-bottom, the two diagonals.
+  const int pairs[4][2] = {{3, 5}, {1, 7}, {0, 8}, {2, 6}};
+  float surround = -1e9f, second = -1e9f;
+  for (const auto& q : pairs) {
+    const float m = std::min(mean[q[0]], mean[q[1]]);
+    if (m > surround) {
+      second = surround;
+      surround = m;
+    } else if (m > second) {
+      second = m;
+    }
+  }
+  *on_line = mean[4] - second;
+  const std::uint32_t outer_sum = v[3][3] - v[0][3] - v[3][0] + v[0][0];
+  const float ring = static_cast<float>(outer_sum - sums[4]) / g.ring_area;
+  surround = std::max(surround, ring);
+  float dog = mean[4] - surround;
+  if (texture_gain > 0) {
+    const std::uint32_t edge_sum = g.rows[2][cols[2] + 1] - g.rows[1][cols[2] + 1] - g.rows[2][cols[1] + 1] + g.rows[1][cols[1] + 1];
+    const float texture = texture_gain * (static_cast<float>(edge_sum) / g.inner_area);
+    dog += texture;
+    *on_line += texture;
+  }
+  return dog;
+}
+
 // Circle-centre voting around (x, y): every pixel within the outline's reach whose gradient is
 // strong votes for the points r along its gradient, both ways (the ball is brighter than the
 // carpet, or darker when the carpet is overexposed), over radii (1 ± radius_tolerance) r; the votes
 // are accumulated on a grid of cells about r / 8 wide within centre_search_fraction r of (x, y) and
 // smoothed over 3x3 cells. Returns (x, y) when no cell gets votes.
-Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p) {
+// `acc` is scratch space (reused between calls).
+Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p,
+                                std::vector<float>& acc) {
   const double search = p.centre_search_fraction * r;
   if (search < 1) return {x, y};
   const int cell = std::max(1, static_cast<int>(r / 8));
   const int half = static_cast<int>(std::ceil(search / cell));
   const int n = 2 * half + 1;
-  std::vector<float> acc(static_cast<std::size_t>(n) * n, 0.f);
+  acc.assign(static_cast<std::size_t>(n) * n, 0.f);
   const double reach = search + (1 + p.radius_tolerance) * r + 1;
   const int x0 = std::max(1, static_cast<int>(x - reach)), x1 = std::min(image.width - 2, static_cast<int>(x + reach));
   const int y0 = std::max(1, static_cast<int>(y - reach)), y1 = std::min(image.height - 2, static_cast<int>(y + reach));
   const double radii[3] = {(1 - p.radius_tolerance) * r, r, (1 + p.radius_tolerance) * r};
   const float min_grad = static_cast<float>(p.min_gradient);
+  // g2 below is (dx^2 + dy^2) / 4 for the integer differences dx, dy, exactly (all terms are small
+  // multiples of 1/4): the same test on the integers first, for the many weak pixels.
+  const float min_d2 = 4 * (min_grad * min_grad);
   for (int py = y0; py <= y1; py += cell) {
     const std::uint8_t* up = image.row(py - 1);
     const std::uint8_t* row = image.row(py);
     const std::uint8_t* down = image.row(py + 1);
     for (int px = x0; px <= x1; px += cell) {
+      const int dx = row[px + 1] - row[px - 1], dy = down[px] - up[px];
+      if (static_cast<float>(dx * dx + dy * dy) < min_d2) continue;
       const float gx = 0.5f * (static_cast<float>(row[px + 1]) - row[px - 1]);
       const float gy = 0.5f * (static_cast<float>(down[px]) - up[px]);
       const float g2 = gx * gx + gy * gy;
@@ -250,9 +320,11 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
       for (const double rr : radii) {
         for (const double sign : {1.0, -1.0}) {
           const double cx = px + 0.5 + sign * rr * ux - x, cy = py + 0.5 + sign * rr * uy - y;
-          const int i = static_cast<int>(std::floor(cx / cell + 0.5)) + half;
-          const int j = static_cast<int>(std::floor(cy / cell + 0.5)) + half;
-          if (i < 0 || j < 0 || i >= n || j >= n) continue;
+          // (a division by 1 changes nothing: skipped for the small radii's one-pixel cells)
+          const int i = static_cast<int>(std::floor((cell == 1 ? cx : cx / cell) + 0.5)) + half;
+          if (i < 0 || i >= n) continue;
+          const int j = static_cast<int>(std::floor((cell == 1 ? cy : cy / cell) + 0.5)) + half;
+          if (j < 0 || j >= n) continue;
           acc[static_cast<std::size_t>(j) * n + i] += g;
         }
       }
@@ -333,8 +405,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   ry0 = std::max(ry0, 0);
   rx1 = std::min(rx1, image.width);
   ry1 = std::min(ry1, image.height);
-  const Integral ii(image, rx0, ry0, rx1, ry1);
-  const Integral ei(image, rx0, ry0, rx1, ry1, true);
+  const Integrals ii(image, rx0, ry0, rx1, ry1);
 
   std::vector<Candidate> candidates;
   std::vector<Candidate> line_candidates;
@@ -363,10 +434,16 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       const Scale scale = scaleAt(r, p);
       const int x_start = rc.x0 + (step - 1) / 2;
       const int yy = std::min(y + (step - 1) / 2, rc.y1 - 1);
+      // No box of this row needs clamping: the fast path (the print term needs the general one).
+      const bool inside = p.print_weight <= 0 && x_start - scale.b >= rx0 && rc.x1 - 1 + scale.b <= rx1 &&
+                          yy - scale.b >= ry0 && yy + scale.b <= ry1;
+      const RowBoxes boxes = inside ? rowBoxes(ii, yy, scale) : RowBoxes{};
       for (int x = x_start; x < rc.x1; x += step) {
         if (!ignore.looked(x, yy)) continue;
         float line_resp = 0;
-        const float resp = response(ii, ei, x, yy, scale, p, &line_resp) * static_cast<float>(rc.boost);
+        const float resp = (inside ? responseInside(boxes, ii.col(x), scale.texture_gain, &line_resp)
+                                   : response(ii, x, yy, scale, p, &line_resp)) *
+                           static_cast<float>(rc.boost);
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }
@@ -411,6 +488,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   std::stable_sort(line_candidates.begin(), line_candidates.end(), by_response);
   std::vector<BallProposal> out;
   std::vector<Eigen::Vector2d> raw_centres;  // the scan's positions of the proposals in `out`
+  std::vector<float> votes;                  // centreFromEdges' scratch
   const auto near = [&](double x, double y, double r) {
     for (std::size_t k = 0; k < out.size(); ++k) {
       const double d = p.nms_fraction * std::max<double>(r, out[k].radius_px);
@@ -427,7 +505,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       if (near(c.x, c.y, c.r)) continue;
       // The centre: where the outline's gradients point to at the expected radius (robust to the
       // shading of the ball's lower half and to its shadow, which pull the DoG's peak upwards).
-      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p);
+      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p, votes);
       if (near(centre.x(), centre.y(), c.r)) continue;  // the same ball as an earlier one
       BallProposal prop;
       prop.centre_px = centre;

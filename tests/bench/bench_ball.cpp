@@ -2,10 +2,13 @@
 // ≤ 0.06 ms, classification ≤ 0.04 ms on a typical 640×480 frame). The frames are rendered at
 // start: a typical one from scenes/ball_game.yaml (case 0, frame 1) and every frame of
 // scenes/ball_hard.yaml, of which the mean and the maximum are printed at the end.
+// BM_BallProposalsReference times the proposer as it was before the speed work (the baseline, in
+// ball_proposer_reference.cpp) on the same frames; the end says on how many frames both propose the
+// same (centre, radius, response).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -16,6 +19,7 @@
 #include "colorfree/sim/runner.h"
 #include "colorfree/sim/scenario.h"
 #include "colorfree/sim/world_renderer.h"
+#include "ball_proposer_reference.h"
 
 namespace {
 
@@ -72,6 +76,21 @@ void BM_BallProposals(benchmark::State& state, const BenchFrame* f) {
   }
 }
 
+void BM_BallProposalsReference(benchmark::State& state, const BenchFrame* f) {
+  for (auto _ : state) {
+    auto p = bench::referenceBallProposals(proposer().params(), f->image.view(), f->camera, f->ignore, f->regions, nullptr);
+    benchmark::DoNotOptimize(p.data());
+  }
+}
+
+bool sameProposals(const std::vector<BallProposal>& a, const std::vector<BallProposal>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].centre_px != b[i].centre_px || a[i].radius_px != b[i].radius_px || a[i].response != b[i].response) return false;
+  }
+  return true;
+}
+
 void BM_BallClassification(benchmark::State& state, const BenchFrame* f) {
   for (auto _ : state) {
     auto b = detector().run(f->image.view(), f->camera, f->proposals);
@@ -80,14 +99,21 @@ void BM_BallClassification(benchmark::State& state, const BenchFrame* f) {
   state.counters["proposals"] = static_cast<double>(f->proposals.size());
 }
 
-// Median of `reps` timings of `fn`, ms.
+// This thread's CPU time, ms (the machine is shared: wall-clock time would count the others' work).
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+// Median of `reps` CPU timings of `fn`, ms.
 template <typename F>
 double medianMs(F&& fn, int reps) {
   std::vector<double> t;
   for (int i = 0; i < reps; ++i) {
-    const auto s = std::chrono::steady_clock::now();
+    const double s = threadCpuMs();
     fn();
-    t.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s).count());
+    t.push_back(threadCpuMs() - s);
   }
   std::nth_element(t.begin(), t.begin() + reps / 2, t.end());
   return t[reps / 2];
@@ -112,15 +138,19 @@ int main(int argc, char** argv) {
   }
   const BenchFrame* typical = &typicalFrames().front();
   benchmark::RegisterBenchmark("BM_BallProposals/typical", BM_BallProposals, typical);
+  benchmark::RegisterBenchmark("BM_BallProposalsReference/typical", BM_BallProposalsReference, typical);
   benchmark::RegisterBenchmark("BM_BallClassification/typical", BM_BallClassification, typical);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
 
   // The hard set: per frame the median of 200 runs; mean and maximum over the frames.
-  double prop_sum = 0, prop_max = 0, cls_sum = 0, cls_max = 0;
+  double prop_sum = 0, prop_max = 0, cls_sum = 0, cls_max = 0, ref_sum = 0, ref_max = 0;
   std::string prop_worst, cls_worst;
   for (const BenchFrame& f : hardFrames()) {
     const double p = medianMs([&] { benchmark::DoNotOptimize(proposer().run(f.image.view(), f.camera, f.ignore, f.regions, nullptr).size()); }, 200);
+    const double r = medianMs([&] { benchmark::DoNotOptimize(bench::referenceBallProposals(proposer().params(), f.image.view(), f.camera, f.ignore, f.regions, nullptr).size()); }, 200);
+    ref_sum += r;
+    ref_max = std::max(ref_max, r);
     const double c = medianMs([&] { benchmark::DoNotOptimize(detector().run(f.image.view(), f.camera, f.proposals).size()); }, 200);
     prop_sum += p;
     cls_sum += c;
@@ -128,9 +158,18 @@ int main(int argc, char** argv) {
     if (c > cls_max) cls_max = c, cls_worst = f.name;
   }
   const double n = static_cast<double>(std::max<std::size_t>(1, hardFrames().size()));
-  std::printf("\nball_hard (%zu frames, median of 200 runs per frame):\n", hardFrames().size());
+  std::printf("\nball_hard (%zu frames, median CPU time of 200 runs per frame):\n", hardFrames().size());
   std::printf("  ball proposals       mean %.4f ms  max %.4f ms (%s)   goal 0.06 ms typical\n", prop_sum / n, prop_max, prop_worst.c_str());
+  std::printf("  (baseline proposals  mean %.4f ms  max %.4f ms)\n", ref_sum / n, ref_max);
   std::printf("  ball classification  mean %.4f ms  max %.4f ms (%s)   goal 0.04 ms typical\n", cls_sum / n, cls_max, cls_worst.c_str());
+  int same = 0, frames = 0;
+  for (auto* set : {&typicalFrames(), &hardFrames()}) {
+    for (const BenchFrame& f : *set) {
+      ++frames;
+      same += sameProposals(f.proposals, bench::referenceBallProposals(proposer().params(), f.image.view(), f.camera, f.ignore, f.regions, nullptr));
+    }
+  }
+  std::printf("  proposals the same as the baseline's on %d of %d frames\n", same, frames);
   benchmark::Shutdown();
   return 0;
 }

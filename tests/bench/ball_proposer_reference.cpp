@@ -1,0 +1,410 @@
+// The ball proposer as it was before issue 6's speed work (code 017b5ec, perception/src/ball_proposer.cpp),
+// kept only as bench_ball's baseline: the benchmark times both on the same frames in one run and
+// checks that they propose the same balls. Not part of the library.
+#include "ball_proposer_reference.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "colorfree/perception/error.h"
+
+namespace colorfree {
+namespace bench {
+
+namespace {
+
+struct ScanRect {
+  int x0, y0, x1, y1;  // [x0, x1) × [y0, y1), inside the image
+  double boost;
+};
+
+struct Candidate {
+  float x, y, r, response;
+};
+
+// An integral image over a region of interest: sums of any box inside the image, with the box
+// clamped to the region (which covers every box the scan asks for, clamped to the image).
+class Integral {
+ public:
+  // `edges`: the integral of the pixel's edge strength |right - here| + |below - here| instead of
+  // its grey level (the ball's print is full of edges; carpet, lines and robots' feet have few).
+  Integral(const GrayView& image, int x0, int y0, int x1, int y1, bool edges = false)
+      : x0_(x0), y0_(y0), w_(x1 - x0), h_(y1 - y0), stride_(w_ + 1),
+        sums_(static_cast<std::size_t>(stride_) * (h_ + 1), 0u) {
+    for (int y = 0; y < h_; ++y) {
+      const std::uint8_t* src = image.row(y0 + y) + x0;
+      const std::uint8_t* below = image.row(std::min(y0 + y + 1, image.height - 1)) + x0;
+      const std::uint32_t* above = sums_.data() + static_cast<std::size_t>(y) * stride_;
+      std::uint32_t* out = sums_.data() + static_cast<std::size_t>(y + 1) * stride_;
+      std::uint32_t run = 0;
+      if (!edges) {
+        for (int x = 0; x < w_; ++x) {
+          run += src[x];
+          out[x + 1] = above[x + 1] + run;
+        }
+      } else {
+        const int last = x0 + w_ < image.width ? w_ : w_ - 1;
+        for (int x = 0; x < w_; ++x) {
+          const int right = x < last ? src[x + 1] : src[x];
+          run += static_cast<std::uint32_t>(std::abs(right - src[x]) + std::abs(below[x] - src[x]));
+          out[x + 1] = above[x + 1] + run;
+        }
+      }
+    }
+  }
+  // Mean over the box [x0, x1) x [y0, y1) (clamped into the region); 0 for an empty box.
+  float mean(int x0, int y0, int x1, int y1) const {
+    x0 = clampX(x0), x1 = clampX(x1), y0 = clampY(y0), y1 = clampY(y1);
+    const int area = (x1 - x0) * (y1 - y0);
+    if (area <= 0) return 0.f;
+    return static_cast<float>(at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0)) / static_cast<float>(area);
+  }
+  // Integral value at image coordinates (x, y) (the sum of pixels left of x and above y),
+  // coordinates clamped into the region.
+  std::uint32_t at(int x, int y) const {
+    x = std::clamp(x - x0_, 0, w_);
+    y = std::clamp(y - y0_, 0, h_);
+    return sums_[static_cast<std::size_t>(y) * stride_ + x];
+  }
+  int clampX(int x) const { return std::clamp(x, x0_, x0_ + w_); }
+  int clampY(int y) const { return std::clamp(y, y0_, y0_ + h_); }
+
+ private:
+  int x0_, y0_, w_, h_, stride_;
+  std::vector<std::uint32_t> sums_;
+};
+
+// The response at (x, y) for expected radius r: a 3×3 grid of cells, the centre cell the inner box.
+// Centre mean minus, over the four pairs of opposite surround cells, the brightest pair's darker
+// cell (a line or a crossing through the centre lights both cells of a pair; a robot's foot or a
+// line beside the ball only one), plus the print term: the spread of the centre's four quadrants.
+// The ball's expected radius at `pixel`: the camera model's (on the optical axis) stretched by
+// (1 / cos of the angle off the axis) ^ off_axis_exponent: a sphere off the axis projects to an
+// ellipse 1 / cos wide across and 1 / cos^2 along the radial direction.
+std::optional<double> expectedRadius(const CameraModel& camera, const BallProposerParams& p,
+                                     const Eigen::Vector2d& pixel, double ball_radius_m) {
+  const auto r = camera.ballRadiusPx(pixel, ball_radius_m);
+  if (!r || p.off_axis_exponent == 0) return r;
+  const CameraIntrinsics& in = camera.intrinsics();
+  const double u = (pixel.x() - in.center_x_px) / in.focal_x_px, v = (pixel.y() - in.center_y_px) / in.focal_y_px;
+  return *r * std::pow(1 + u * u + v * v, 0.5 * p.off_axis_exponent);
+}
+
+// The filter's sizes at one expected radius (the same along a scan row).
+struct Scale {
+  int a, b;            // centre and surround box half-sides, pixels
+  float texture_gain;  // texture_weight × (r / reference) ^ exponent
+};
+
+Scale scaleAt(double r, const BallProposerParams& p) {
+  Scale s;
+  s.a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
+  s.b = std::max(s.a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
+  s.texture_gain = static_cast<float>(p.texture_weight *
+                                      std::pow(r / p.texture_reference_radius_px, p.texture_scale_exponent));
+  return s;
+}
+
+float response(const Integral& ii, const Integral& ei, int x, int y, const Scale& sc, const BallProposerParams& p,
+               float* on_line = nullptr) {
+  const int a = sc.a, b = sc.b;
+  const int xs[4] = {ii.clampX(x - b), ii.clampX(x - a), ii.clampX(x + a), ii.clampX(x + b)};
+  const int ys[4] = {ii.clampY(y - b), ii.clampY(y - a), ii.clampY(y + a), ii.clampY(y + b)};
+  std::uint32_t v[4][4];
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 4; ++i) v[j][i] = ii.at(xs[i], ys[j]);
+  }
+  float mean[3][3];
+  bool valid[3][3];
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      const int area = (xs[i + 1] - xs[i]) * (ys[j + 1] - ys[j]);
+      valid[j][i] = area > 0;
+      const std::uint32_t s = v[j + 1][i + 1] - v[j][i + 1] - v[j + 1][i] + v[j][i];
+      mean[j][i] = area > 0 ? static_cast<float>(s) / static_cast<float>(area) : 0.f;
+    }
+  }
+  if (!valid[1][1]) return -1e9f;
+  // Opposite pairs: left-right, top-bottom, and the two diagonals. A cell outside the image does
+  // not light its pair.
+  const int pairs[4][4] = {{1, 0, 1, 2}, {0, 1, 2, 1}, {0, 0, 2, 2}, {0, 2, 2, 0}};
+  float surround = -1e9f, second = -1e9f;
+  for (const auto& q : pairs) {
+    if (valid[q[0]][q[1]] && valid[q[2]][q[3]]) {
+      const float m = std::min(mean[q[0]][q[1]], mean[q[2]][q[3]]);
+      if (m > surround) {
+        second = surround;
+        surround = m;
+      } else if (m > second) {
+        second = m;
+      }
+    }
+  }
+  // On a line: the ball on a line lights one pair like the line itself; against the second
+  // brightest pair it still stands out (a crossing lights two pairs).
+  if (on_line) *on_line = second > -1e8f ? mean[1][1] - second : -1e9f;
+  // The ring's mean (the 8 cells, by area): off the ball's centre part of the ball falls into the
+  // ring and raises it, which keeps the peak on the centre.
+  const int ring_area = (xs[3] - xs[0]) * (ys[3] - ys[0]) - (xs[2] - xs[1]) * (ys[2] - ys[1]);
+  if (ring_area <= 0) return -1e9f;
+  const std::uint32_t outer_sum = v[3][3] - v[0][3] - v[3][0] + v[0][0];
+  const std::uint32_t inner_sum = v[2][2] - v[1][2] - v[2][1] + v[1][1];
+  const float ring = static_cast<float>(outer_sum - inner_sum) / static_cast<float>(ring_area);
+  surround = std::max(surround, ring);
+  float dog = mean[1][1] - surround;
+  if (sc.texture_gain > 0) {
+    const float texture = sc.texture_gain * ei.mean(xs[1], ys[1], xs[2], ys[2]);
+    dog += texture;
+    if (on_line) *on_line += texture;
+  }
+  if (p.print_weight > 0) {
+    const int cx = std::clamp(x, xs[1], xs[2]);
+    const int cy = std::clamp(y, ys[1], ys[2]);
+    const int qx[3] = {xs[1], cx, xs[2]};
+    const int qy[3] = {ys[1], cy, ys[2]};
+    float lo = 1e9f, hi = -1e9f;
+    for (int j = 0; j < 2; ++j) {
+      for (int i = 0; i < 2; ++i) {
+        const int area = (qx[i + 1] - qx[i]) * (qy[j + 1] - qy[j]);
+        if (area <= 0) continue;
+        const std::uint32_t s = ii.at(qx[i + 1], qy[j + 1]) - ii.at(qx[i], qy[j + 1]) -
+                                ii.at(qx[i + 1], qy[j]) + ii.at(qx[i], qy[j]);
+        const float m = static_cast<float>(s) / static_cast<float>(area);
+        lo = std::min(lo, m);
+        hi = std::max(hi, m);
+      }
+    }
+    if (hi >= lo) dog += static_cast<float>(p.print_weight) * (hi - lo);
+  }
+  return dog;
+}
+
+// Circle-centre voting around (x, y): every pixel within the outline's reach whose gradient is
+// strong votes for the points r along its gradient, both ways (the ball is brighter than the
+// carpet, or darker when the carpet is overexposed), over radii (1 ± radius_tolerance) r; the votes
+// are accumulated on a grid of cells about r / 8 wide within centre_search_fraction r of (x, y) and
+// smoothed over 3x3 cells. Returns (x, y) when no cell gets votes.
+Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p) {
+  const double search = p.centre_search_fraction * r;
+  if (search < 1) return {x, y};
+  const int cell = std::max(1, static_cast<int>(r / 8));
+  const int half = static_cast<int>(std::ceil(search / cell));
+  const int n = 2 * half + 1;
+  std::vector<float> acc(static_cast<std::size_t>(n) * n, 0.f);
+  const double reach = search + (1 + p.radius_tolerance) * r + 1;
+  const int x0 = std::max(1, static_cast<int>(x - reach)), x1 = std::min(image.width - 2, static_cast<int>(x + reach));
+  const int y0 = std::max(1, static_cast<int>(y - reach)), y1 = std::min(image.height - 2, static_cast<int>(y + reach));
+  const double radii[3] = {(1 - p.radius_tolerance) * r, r, (1 + p.radius_tolerance) * r};
+  const float min_grad = static_cast<float>(p.min_gradient);
+  for (int py = y0; py <= y1; py += cell) {
+    const std::uint8_t* up = image.row(py - 1);
+    const std::uint8_t* row = image.row(py);
+    const std::uint8_t* down = image.row(py + 1);
+    for (int px = x0; px <= x1; px += cell) {
+      const float gx = 0.5f * (static_cast<float>(row[px + 1]) - row[px - 1]);
+      const float gy = 0.5f * (static_cast<float>(down[px]) - up[px]);
+      const float g2 = gx * gx + gy * gy;
+      if (g2 < min_grad * min_grad) continue;
+      const float g = std::sqrt(g2);
+      const double ux = gx / g, uy = gy / g;
+      for (const double rr : radii) {
+        for (const double sign : {1.0, -1.0}) {
+          const double cx = px + 0.5 + sign * rr * ux - x, cy = py + 0.5 + sign * rr * uy - y;
+          const int i = static_cast<int>(std::floor(cx / cell + 0.5)) + half;
+          const int j = static_cast<int>(std::floor(cy / cell + 0.5)) + half;
+          if (i < 0 || j < 0 || i >= n || j >= n) continue;
+          acc[static_cast<std::size_t>(j) * n + i] += g;
+        }
+      }
+    }
+  }
+  float best = 0;
+  int bi = half, bj = half;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double di = (i - half) * cell, dj = (j - half) * cell;
+      if (di * di + dj * dj > search * search) continue;
+      float v = 0;
+      for (int b = std::max(0, j - 1); b <= std::min(n - 1, j + 1); ++b) {
+        for (int a = std::max(0, i - 1); a <= std::min(n - 1, i + 1); ++a) v += acc[static_cast<std::size_t>(b) * n + a];
+      }
+      if (v > best) best = v, bi = i, bj = j;
+    }
+  }
+  return {x + (bi - half) * cell, y + (bj - half) * cell};
+}
+
+}  // namespace
+
+std::vector<BallProposal> referenceBallProposals(const BallProposerParams& p, const GrayView& image,
+                                                 const CameraModel& camera, const IgnoreMask& ignore,
+                                                 const ContrastRegions& regions,
+                                                 const std::vector<RobotPercept>* robots) {
+  if (image.empty()) throw Error("ball proposals: empty image");
+  if (ignore.width != image.width || ignore.height != image.height) {
+    throw Error("ball proposals: ignore mask does not match the image size");
+  }
+  if (regions.columns * regions.window_px > image.width ||
+      regions.rows * regions.window_px > image.height ||
+      regions.mask.size() != static_cast<std::size_t>(regions.columns) * regions.rows) {
+    throw Error("ball proposals: high-contrast windows do not match the image size");
+  }
+  std::vector<ScanRect> rects;
+  const int s = regions.window_px;
+  for (int r = 0; r < regions.rows; ++r) {
+    for (int c = 0; c < regions.columns; ++c) {
+      if (regions.marked(c, r)) rects.push_back({c * s, r * s, (c + 1) * s, (r + 1) * s, 1.0});
+    }
+  }
+  if (robots != nullptr) {
+    for (const RobotPercept& robot : *robots) {
+      const auto rad = expectedRadius(camera, p, robot.feet_px, p.ball_radius_m);
+      if (!rad) continue;
+      const double half = p.feet_region_diameters * 2 * *rad / 2;
+      const int x0 = std::max(0, static_cast<int>(std::floor(robot.feet_px.x() - half)));
+      const int x1 = std::min(image.width, static_cast<int>(std::ceil(robot.feet_px.x() + half)));
+      const int y0 = std::max(0, static_cast<int>(std::floor(robot.feet_px.y() - half)));
+      const int y1 = std::min(image.height, static_cast<int>(std::ceil(robot.feet_px.y() + half)));
+      if (x1 > x0 && y1 > y0) rects.push_back({x0, y0, x1, y1, p.feet_boost});
+    }
+  }
+  if (rects.empty()) return {};
+
+  // Expected radius at the top and bottom of every rectangle (interpolated in between).
+  struct RectRadius {
+    std::optional<double> top, bottom;
+  };
+  std::vector<RectRadius> radii(rects.size());
+  int rx0 = image.width, ry0 = image.height, rx1 = 0, ry1 = 0;
+  for (std::size_t k = 0; k < rects.size(); ++k) {
+    const ScanRect& rc = rects[k];
+    const double cx = (rc.x0 + rc.x1) / 2.0;
+    radii[k].top = expectedRadius(camera, p, {cx, rc.y0 + 0.5}, p.ball_radius_m);
+    radii[k].bottom = expectedRadius(camera, p, {cx, rc.y1 - 0.5}, p.ball_radius_m);
+    const double rmax = std::min(p.max_radius_px, std::max({p.min_radius_px, radii[k].top.value_or(0),
+                                                            radii[k].bottom.value_or(0)}));
+    const int margin = static_cast<int>(std::ceil(p.outer_fraction * rmax)) + 2;
+    rx0 = std::min(rx0, rc.x0 - margin);
+    ry0 = std::min(ry0, rc.y0 - margin);
+    rx1 = std::max(rx1, rc.x1 + margin);
+    ry1 = std::max(ry1, rc.y1 + margin);
+  }
+  rx0 = std::max(rx0, 0);
+  ry0 = std::max(ry0, 0);
+  rx1 = std::min(rx1, image.width);
+  ry1 = std::min(ry1, image.height);
+  const Integral ii(image, rx0, ry0, rx1, ry1);
+  const Integral ei(image, rx0, ry0, rx1, ry1, true);
+
+  std::vector<Candidate> candidates;
+  std::vector<Candidate> line_candidates;
+  std::vector<Candidate> best;
+  const int keep = p.per_window_count;
+  for (std::size_t k = 0; k < rects.size(); ++k) {
+    const ScanRect& rc = rects[k];
+    best.clear();
+    Candidate best_line{0, 0, 0, -1e9f};
+    const double cx = (rc.x0 + rc.x1) / 2.0;
+    int y = rc.y0;
+    while (y < rc.y1) {
+      std::optional<double> rad;
+      if (radii[k].top && radii[k].bottom) {
+        const double t = rc.y1 - 1 > rc.y0 ? (y - rc.y0) / double(rc.y1 - 1 - rc.y0) : 0.0;
+        rad = *radii[k].top + t * (*radii[k].bottom - *radii[k].top);
+      } else {
+        rad = expectedRadius(camera, p, {cx, y + 0.5}, p.ball_radius_m);
+      }
+      if (!rad || *rad > p.max_radius_px || *rad < p.min_radius_px) {
+        ++y;
+        continue;
+      }
+      const double r = *rad;
+      const int step = std::max(1, static_cast<int>(p.step_fraction * r));
+      const Scale scale = scaleAt(r, p);
+      const int x_start = rc.x0 + (step - 1) / 2;
+      const int yy = std::min(y + (step - 1) / 2, rc.y1 - 1);
+      for (int x = x_start; x < rc.x1; x += step) {
+        if (!ignore.looked(x, yy)) continue;
+        float line_resp = 0;
+        const float resp = response(ii, ei, x, yy, scale, p, &line_resp) * static_cast<float>(rc.boost);
+        if (p.line_count > 0 && line_resp > best_line.response) {
+          best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
+        }
+        if (resp < p.min_response) continue;
+        const Candidate cand{x + 0.5f, yy + 0.5f, static_cast<float>(r), resp};
+        if (static_cast<int>(best.size()) < keep) {
+          best.push_back(cand);
+        } else {
+          auto weakest = std::min_element(best.begin(), best.end(), [](const Candidate& l, const Candidate& m) {
+            return l.response < m.response;
+          });
+          if (cand.response > weakest->response) *weakest = cand;
+        }
+      }
+      y += step;
+    }
+    candidates.insert(candidates.end(), best.begin(), best.end());
+    if (best_line.response >= p.line_min_response) line_candidates.push_back(best_line);
+  }
+  // Robots' bodies above their feet regions (white, textured parts) cannot hold a visible ball
+  // lying on the ground in front of them: their candidates count robot_body_factor of their response.
+  if (robots != nullptr && p.robot_body_factor < 1) {
+    for (const RobotPercept& robot : *robots) {
+      const auto rad = expectedRadius(camera, p, robot.feet_px, p.ball_radius_m);
+      if (!rad) continue;
+      const double top_of_feet = robot.feet_px.y() - p.feet_region_diameters * *rad;
+      for (std::vector<Candidate>* list : {&candidates, &line_candidates}) {
+        for (Candidate& c : *list) {
+          if (c.x >= robot.box.x0 && c.x <= robot.box.x1 && c.y >= robot.box.y0 && c.y < top_of_feet) {
+            c.response *= static_cast<float>(p.robot_body_factor);
+          }
+        }
+      }
+    }
+  }
+  const auto by_response = [](const Candidate& l, const Candidate& m) {
+    if (l.response != m.response) return l.response > m.response;
+    if (l.y != m.y) return l.y < m.y;
+    return l.x < m.x;
+  };
+  std::stable_sort(candidates.begin(), candidates.end(), by_response);
+  std::stable_sort(line_candidates.begin(), line_candidates.end(), by_response);
+  std::vector<BallProposal> out;
+  std::vector<Eigen::Vector2d> raw_centres;  // the scan's positions of the proposals in `out`
+  const auto near = [&](double x, double y, double r) {
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      const double d = p.nms_fraction * std::max<double>(r, out[k].radius_px);
+      for (const Eigen::Vector2d& o : {out[k].centre_px, raw_centres[k]}) {
+        const double dx = x - o.x(), dy = y - o.y();
+        if (dx * dx + dy * dy < d * d) return true;
+      }
+    }
+    return false;
+  };
+  const auto take = [&](const std::vector<Candidate>& list, int limit) {
+    for (const Candidate& c : list) {
+      if (static_cast<int>(out.size()) >= limit) break;
+      if (near(c.x, c.y, c.r)) continue;
+      // The centre: where the outline's gradients point to at the expected radius (robust to the
+      // shading of the ball's lower half and to its shadow, which pull the DoG's peak upwards).
+      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p);
+      if (near(centre.x(), centre.y(), c.r)) continue;  // the same ball as an earlier one
+      BallProposal prop;
+      prop.centre_px = centre;
+      prop.radius_px = c.r;
+      prop.response = c.response;
+      raw_centres.emplace_back(c.x, c.y);
+      out.push_back(prop);
+    }
+  };
+  take(candidates, p.max_count - p.line_count);
+  take(line_candidates, static_cast<int>(out.size()) + p.line_count);
+  take(candidates, p.max_count);  // unused line slots go back to the others
+  // Strongest first (refinement can reorder; on-line responses share the scale).
+  std::stable_sort(out.begin(), out.end(),
+                   [](const BallProposal& l, const BallProposal& m) { return l.response > m.response; });
+  return out;
+}
+
+}  // namespace bench
+}  // namespace colorfree
