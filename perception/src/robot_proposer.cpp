@@ -144,7 +144,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
               std::max(p.max_gap_px, static_cast<int>(p.max_gap_height_fraction * *expected));
           int run_top = y, gap = 0, filled = 0;
           for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
-            if (std::abs(image.at(x, yy) - ref) > thr) {
+            const double d = image.at(x, yy);
+            if (d - ref > thr || carpet - d > thr) {
               ++filled;
               run_top = yy;
               gap = 0;
