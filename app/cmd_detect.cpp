@@ -162,6 +162,7 @@ nlohmann::json orientationLinesJson(const RobotLines& lines) {
     if (region.side) {
       const char* names[] = {"front", "back", "side"};
       r["side"] = names[static_cast<int>(*region.side)];
+      if (region.side_facing_known) r["side_facing"] = region.faces_left ? "left" : "right";
     }
     o["regions"].push_back(r);
   }
@@ -264,7 +265,8 @@ void drawAnnotated(const std::string& path, const Frame& frame, const PipelineCo
   }
   if (frame.robot_percepts && !frame.robot_percepts->empty()) {
     // The orientation stage's inside: silhouette points (green), its lines (magenta) and their
-    // regions (yellow: usable, with OriNet's class F/B/S; grey: rejected).
+    // regions (yellow: usable, with OriNet's class F/B/S, SL/SR when it saw the side's facing
+    // left or right; grey: rejected).
     const RobotOrientationEstimator ori = orientationEstimator(config);
     for (const auto& r : *frame.robot_percepts) {
       const RobotLines lines = ori.estimate(frame.image, frame.camera, r);
@@ -277,7 +279,9 @@ void drawAnnotated(const std::string& path, const Frame& frame, const PipelineCo
         cv::rectangle(img, pt({region.box.x0, region.box.y0}), pt({region.box.x1, region.box.y1}), colour, 1);
         if (region.side) {
           const char* names[] = {"F", "B", "S"};
-          cv::putText(img, names[static_cast<int>(*region.side)], pt({region.box.x0, region.box.y1 + 12}),
+          std::string name = names[static_cast<int>(*region.side)];
+          if (region.side_facing_known) name += region.faces_left ? "L" : "R";
+          cv::putText(img, name, pt({region.box.x0, region.box.y1 + 12}),
                       cv::FONT_HERSHEY_SIMPLEX, 0.4, colour, 1);
         }
       }
