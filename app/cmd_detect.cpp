@@ -1,3 +1,4 @@
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -134,8 +135,43 @@ void printText(const std::string& path, const Frame& frame, const PipelineStats&
   std::printf("%s", stats.table().c_str());
 }
 
-nlohmann::json robotsJson(const Frame& frame) {
+RobotOrientationEstimator orientationEstimator(const PipelineConfig& config) {
+  const std::string dir = config.model_dir.empty() ? cnn::defaultModelDir() : config.model_dir;
+  auto net = [&](const char* stem) {
+    return cnn::Classifier::load(dir + "/" + stem + ".cfg", dir + "/" + stem + ".weights");
+  };
+  return RobotOrientationEstimator(config.robot_orientation, config.field, net("ori_boost_net"),
+                                   net("ori_net"));
+}
+
+// The orientation stage's inside for one robot: its silhouette points and each line's region with
+// the nets' answers (what `--out` draws).
+nlohmann::json orientationLinesJson(const RobotLines& lines) {
+  nlohmann::json o;
+  o["silhouette_points"] = lines.silhouette_px.size();
+  o["regions"] = nlohmann::json::array();
+  for (const auto& region : lines.regions) {
+    const Eigen::Vector2d d = region.line_in_robot.direction();
+    nlohmann::json r = {{"line_a_m", vec(region.line_in_robot.a)},
+                        {"line_b_m", vec(region.line_in_robot.b)},
+                        {"line_deg", std::atan2(d.y(), d.x()) * 180 / 3.14159265358979},
+                        {"votes", region.line_in_robot.votes},
+                        {"box_px", {region.box.x0, region.box.y0, region.box.x1, region.box.y1}},
+                        {"usable", region.usable},
+                        {"side_confidence", region.side_confidence}};
+    if (region.side) {
+      const char* names[] = {"front", "back", "side"};
+      r["side"] = names[static_cast<int>(*region.side)];
+      if (region.side_facing_known) r["side_facing"] = region.faces_left ? "left" : "right";
+    }
+    o["regions"].push_back(r);
+  }
+  return o;
+}
+
+nlohmann::json robotsJson(const Frame& frame, const PipelineConfig& config) {
   nlohmann::json j = nlohmann::json::array();
+  const RobotOrientationEstimator ori = orientationEstimator(config);
   for (const auto& r : *frame.robot_percepts) {
     nlohmann::json o = {{"box_px", {r.box.x0, r.box.y0, r.box.x1, r.box.y1}},
                         {"feet_px", vec(r.feet_px)},
@@ -145,6 +181,7 @@ nlohmann::json robotsJson(const Frame& frame) {
       o["orientation_deg"] = r.orientation_raw->angle_rad * 180 / 3.14159265358979;
       o["facing_known"] = r.orientation_raw->facing_known;
     }
+    o["orientation_lines"] = orientationLinesJson(ori.estimate(frame.image, frame.camera, r));
     j.push_back(o);
   }
   return j;
@@ -228,13 +265,9 @@ void drawAnnotated(const std::string& path, const Frame& frame, const PipelineCo
   }
   if (frame.robot_percepts && !frame.robot_percepts->empty()) {
     // The orientation stage's inside: silhouette points (green), its lines (magenta) and their
-    // regions (yellow: usable, with OriNet's class F/B/S; grey: rejected).
-    const std::string dir = config.model_dir.empty() ? cnn::defaultModelDir() : config.model_dir;
-    auto net = [&](const char* stem) {
-      return cnn::Classifier::load(dir + "/" + stem + ".cfg", dir + "/" + stem + ".weights");
-    };
-    const RobotOrientationEstimator ori(config.robot_orientation, config.field, net("ori_boost_net"),
-                                        net("ori_net"));
+    // regions (yellow: usable, with OriNet's class F/B/S, SL/SR when it saw the side's facing
+    // left or right; grey: rejected).
+    const RobotOrientationEstimator ori = orientationEstimator(config);
     for (const auto& r : *frame.robot_percepts) {
       const RobotLines lines = ori.estimate(frame.image, frame.camera, r);
       for (const auto& q : lines.silhouette_px) cv::circle(img, pt(q), 0, {0, 255, 0}, -1);
@@ -246,7 +279,9 @@ void drawAnnotated(const std::string& path, const Frame& frame, const PipelineCo
         cv::rectangle(img, pt({region.box.x0, region.box.y0}), pt({region.box.x1, region.box.y1}), colour, 1);
         if (region.side) {
           const char* names[] = {"F", "B", "S"};
-          cv::putText(img, names[static_cast<int>(*region.side)], pt({region.box.x0, region.box.y1 + 12}),
+          std::string name = names[static_cast<int>(*region.side)];
+          if (region.side_facing_known) name += region.faces_left ? "L" : "R";
+          cv::putText(img, name, pt({region.box.x0, region.box.y1 + 12}),
                       cv::FONT_HERSHEY_SIMPLEX, 0.4, colour, 1);
         }
       }
@@ -324,7 +359,7 @@ void addDetectCommand(CLI::App& app, int& exit_code) {
     pipeline.process(frame, &stats);
     if (opt->json) {
       nlohmann::json j = toJson(frame, stats);
-      j["robots"] = robotsJson(frame);
+      j["robots"] = robotsJson(frame, config);
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       printText(opt->image, frame, stats);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <Eigen/Eigenvalues>
 
 #include "colorfree/perception/cnn/shipped_nets.h"
@@ -29,12 +30,14 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.second_line_min_length_m = f.getInRange("second_line_min_length_m", 0, 2);
   p.second_line_max_length_m = f.getInRange("second_line_max_length_m", 0, 2);
   p.second_line_max_cos = f.getInRange("second_line_max_cos", 0, 1);
+  p.second_line_max_refined_cos = f.getInRange("second_line_max_refined_cos", 0, 1);
   p.min_line_votes = f.getInRange("min_line_votes", 0, 1000);
   p.region_margin_fraction = f.getInRange("region_margin_fraction", 0, 2);
   p.region_above_fraction = f.getInRange("region_above_fraction", 0, 2);
   p.region_below_fraction = f.getInRange("region_below_fraction", 0, 2);
   p.min_usable_confidence = f.getInRange("min_usable_confidence", 0, 1);
   p.min_side_confidence = f.getInRange("min_side_confidence", 0, 1);
+  p.min_side_facing_share = f.getInRange("min_side_facing_share", 0.5, 1);
   p.track_max_distance_m = f.getInRange("track_max_distance_m", 0, 10);
   p.track_expiry_s = f.getInRange("track_expiry_s", 0, 60);
   p.filter_buffer_size = static_cast<int>(f.getInRange("filter_buffer_size", 1, 101));
@@ -53,6 +56,7 @@ CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int widt
   y0 = std::clamp(y0, 0, image.height);
   width = std::clamp(width, 0, image.width - x0);
   height = std::clamp(height, 0, image.height - y0);
+  radius = std::max(radius, 0);
   out.x0 = x0;
   out.y0 = y0;
   out.width = width;
@@ -60,42 +64,63 @@ CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int widt
   out.gx.assign(static_cast<std::size_t>(width) * height, 0.0f);
   out.gy.assign(out.gx.size(), 0.0f);
   if (width == 0 || height == 0) return out;
-  auto px = [&](int x, int y) -> double {
-    return image.at(std::clamp(x, 0, image.width - 1), std::clamp(y, 0, image.height - 1));
-  };
-  // Integral images of the values and their squares over the region grown by the window radius.
-  const int gw = width + 2 * radius, gh = height + 2 * radius;
-  std::vector<double> s((gw + 1) * (gh + 1), 0.0), s2((gw + 1) * (gh + 1), 0.0);
-  for (int j = 0; j < gh; ++j) {
-    double row = 0, row2 = 0;
-    for (int i = 0; i < gw; ++i) {
-      const double v = px(x0 - radius + i, y0 - radius + j);
-      row += v;
-      row2 += v * v;
-      s[(j + 1) * (gw + 1) + i + 1] = s[j * (gw + 1) + i + 1] + row;
-      s2[(j + 1) * (gw + 1) + i + 1] = s2[j * (gw + 1) + i + 1] + row2;
-    }
+  // The region grown by a border (the variance window's radius, at least the Sobel's 1 px),
+  // copied once with reads clamped to the image: the loops below read it without any checks.
+  const int border = std::max(radius, 1);
+  const int pw = width + 2 * border, ph = height + 2 * border;
+  std::vector<std::int32_t> pix(static_cast<std::size_t>(pw) * ph);
+  std::vector<int> col(pw);
+  for (int i = 0; i < pw; ++i) col[i] = std::clamp(x0 - border + i, 0, image.width - 1);
+  for (int j = 0; j < ph; ++j) {
+    const std::uint8_t* src = image.row(std::clamp(y0 - border + j, 0, image.height - 1));
+    std::int32_t* dst = &pix[static_cast<std::size_t>(j) * pw];
+    for (int i = 0; i < pw; ++i) dst[i] = src[col[i]];
   }
   const int side = 2 * radius + 1;
-  const double n = side * side;
-  const double sigma2 = sigma * sigma;
+  const std::int64_t n = static_cast<std::int64_t>(side) * side;
+  const float inv_n2 = 1.0f / static_cast<float>(n * n);
+  const float sigma2 = static_cast<float>(sigma * sigma);
+  // Vertical sums of the values and their squares over the window's rows, per padded column,
+  // slid down row by row; the horizontal sum slides along each row.
+  std::vector<std::int32_t> vs(pw, 0), vs2(pw, 0);
+  for (int j = border - radius; j <= border + radius; ++j) {
+    const std::int32_t* r = &pix[static_cast<std::size_t>(j) * pw];
+    for (int i = 0; i < pw; ++i) {
+      vs[i] += r[i];
+      vs2[i] += r[i] * r[i];
+    }
+  }
   for (int y = 0; y < height; ++y) {
+    if (y > 0) {
+      const std::int32_t* gone = &pix[static_cast<std::size_t>(y - 1 + border - radius) * pw];
+      const std::int32_t* come = &pix[static_cast<std::size_t>(y + border + radius) * pw];
+      for (int i = 0; i < pw; ++i) {
+        vs[i] += come[i] - gone[i];
+        vs2[i] += come[i] * come[i] - gone[i] * gone[i];
+      }
+    }
+    const std::int32_t* up = &pix[static_cast<std::size_t>(y + border - 1) * pw + border];
+    const std::int32_t* mid = up + pw;
+    const std::int32_t* down = mid + pw;
+    float* ogx = &out.gx[static_cast<std::size_t>(y) * width];
+    float* ogy = &out.gy[static_cast<std::size_t>(y) * width];
+    std::int64_t s = 0, s2 = 0;
+    for (int i = border - radius; i < border + radius; ++i) {
+      s += vs[i];
+      s2 += vs2[i];
+    }
     for (int x = 0; x < width; ++x) {
-      const int ix = x0 + x, iy = y0 + y;
-      const double gx = (px(ix + 1, iy - 1) + 2 * px(ix + 1, iy) + px(ix + 1, iy + 1)) -
-                        (px(ix - 1, iy - 1) + 2 * px(ix - 1, iy) + px(ix - 1, iy + 1));
-      const double gy = (px(ix - 1, iy + 1) + 2 * px(ix, iy + 1) + px(ix + 1, iy + 1)) -
-                        (px(ix - 1, iy - 1) + 2 * px(ix, iy - 1) + px(ix + 1, iy - 1));
-      // Window [x, x + side) in the grown grid is centred on (x, y) of the region.
-      auto sum = [&](const std::vector<double>& t) {
-        return t[(y + side) * (gw + 1) + x + side] - t[y * (gw + 1) + x + side] -
-               t[(y + side) * (gw + 1) + x] + t[y * (gw + 1) + x];
-      };
-      const double mean = sum(s) / n;
-      const double var = std::max(0.0, sum(s2) / n - mean * mean);
-      const double norm = std::sqrt(64.0 * var + sigma2);
-      out.gx[y * width + x] = static_cast<float>(gx / norm);
-      out.gy[y * width + x] = static_cast<float>(gy / norm);
+      s += vs[x + border + radius];
+      s2 += vs2[x + border + radius];
+      const int gx = (up[x + 1] + 2 * mid[x + 1] + down[x + 1]) - (up[x - 1] + 2 * mid[x - 1] + down[x - 1]);
+      const int gy = (down[x - 1] + 2 * down[x] + down[x + 1]) - (up[x - 1] + 2 * up[x] + up[x + 1]);
+      // n² · variance, exact in integers.
+      const std::int64_t var_n2 = std::max<std::int64_t>(0, n * s2 - s * s);
+      const float inv_norm = 1.0f / std::sqrt(64.0f * static_cast<float>(var_n2) * inv_n2 + sigma2);
+      ogx[x] = static_cast<float>(gx) * inv_norm;
+      ogy[x] = static_cast<float>(gy) * inv_norm;
+      s -= vs[x + border - radius];
+      s2 -= vs2[x + border - radius];
     }
   }
   return out;
@@ -109,8 +134,8 @@ RobotOrientationEstimator::RobotOrientationEstimator(RobotOrientationParams para
       robot_height_m_(field.robot_height_m),
       boost_(std::move(ori_boost_net)),
       ori_(std::move(ori_net)) {
-  if (boost_.classes() != 2 || ori_.classes() != 3) {
-    throw Error("robot orientation: OriBoostNet must give 2 classes and OriNet 3");
+  if (boost_.classes() != 2 || ori_.classes() != 4) {
+    throw Error("robot orientation: OriBoostNet must give 2 classes and OriNet 4 (front, back, side facing left, side facing right)");
   }
 }
 
@@ -176,6 +201,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   if (cns.width < 3 || cns.height < 3) return out;
   const int half = p.median_width_px / 2;
   float window[9];
+  const float threshold = static_cast<float>(p.cns_threshold);
   // Per scan line, the edges from the bottom up (the lowest row of each run of rows above the
   // threshold; a real edge answers on several rows, noise on one), at most kMaxHits.
   constexpr int kMaxHits = 4;
@@ -189,11 +215,19 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     first_hit.push_back(static_cast<int>(hits.size()));
     int run = 0, found = 0;
     for (int y = cns.y0 + cns.height - 2; y > cns.y0 && found < kMaxHits; --y) {
-      int n = 0;
       // Bright feet above the darker carpet: the vertical response is negative there.
-      for (int dx = -half; dx <= half; ++dx) window[n++] = -cns.gyAt(x + dx, y);
-      std::nth_element(window, window + n / 2, window + n);
-      run = window[n / 2] > p.cns_threshold ? run + 1 : 0;
+      const float* g = &cns.gy[static_cast<std::size_t>(y - cns.y0) * cns.width + (x - cns.x0)];
+      float median;
+      if (half == 1) {
+        const float a = -g[-1], b = -g[0], c = -g[1];
+        median = std::max(std::min(a, b), std::min(std::max(a, b), c));
+      } else {
+        int n = 0;
+        for (int dx = -half; dx <= half; ++dx) window[n++] = -g[dx];
+        std::nth_element(window, window + n / 2, window + n);
+        median = window[n / 2];
+      }
+      run = median > threshold ? run + 1 : 0;
       if (run == p.silhouette_min_rows) {
         hits.push_back({columns, y + p.silhouette_min_rows - 1});
         ++found;
@@ -240,11 +274,18 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   bounds.max_orthogonality_cos = p.second_line_max_cos;
   bounds.viewpoint = camera.position().head<2>();
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
+  std::optional<Eigen::Vector2d> first_direction;
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
     // Twice: the hull edge's direction is rough, the first fit's much less so.
     line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m);
     line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, 0.0);
+    // The feet's edges meet at right angles: a refitted second line far from orthogonal to the
+    // refitted first is no edge of the feet (its class would contradict or mislead the first's).
+    if (first_direction && std::abs(line->direction().dot(*first_direction)) > p.second_line_max_refined_cos) {
+      continue;
+    }
+    if (!first_direction) first_direction = line->direction();
     const auto a = camera.robotToPixel({line->a.x(), line->a.y(), 0});
     const auto b = camera.robotToPixel({line->b.x(), line->b.y(), 0});
     if (!a || !b) continue;
@@ -288,13 +329,26 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
     LineRegion& r = out.regions[i];
     r.usable = usable[2 * i + 1];
     if (r.usable < params_.min_usable_confidence) continue;
-    const float* s = &sides[3 * i];
-    const int best = static_cast<int>(std::max_element(s, s + 3) - s);
-    r.side_confidence = s[best];
-    if (s[best] < params_.min_side_confidence) continue;
+    // OriNet: front, back, side facing the observer's left, side facing its right. The class is
+    // decided over front / back / side (the two side classes summed); a side region's facing is
+    // known only when one of its two classes clearly dominates.
+    const float* s = &sides[4 * i];
+    const float side_sum = s[2] + s[3];
+    const float scores[3] = {s[0], s[1], side_sum};
+    const int best = static_cast<int>(std::max_element(scores, scores + 3) - scores);
+    r.side_confidence = scores[best];
+    if (scores[best] < params_.min_side_confidence) continue;
     r.side = static_cast<RobotSide>(best);
-    orientations.push_back(
-        orientationFromLine(r.line_in_robot.a, r.line_in_robot.b, *r.side, position));
+    if (*r.side == RobotSide::kSide && side_sum > 0 &&
+        std::max(s[2], s[3]) >= params_.min_side_facing_share * side_sum) {
+      r.side_facing_known = true;
+      r.faces_left = s[2] >= s[3];
+      orientations.push_back(
+          orientationFromSideLine(r.line_in_robot.a, r.line_in_robot.b, r.faces_left, position));
+    } else {
+      orientations.push_back(
+          orientationFromLine(r.line_in_robot.a, r.line_in_robot.b, *r.side, position));
+    }
     classes.push_back(*r.side);
   }
   out.orientation = combineLineOrientations(orientations, classes);

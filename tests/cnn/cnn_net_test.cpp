@@ -44,7 +44,7 @@ struct PaperNet {
 constexpr PaperNet kPaperNets[] = {
     {"robot_net.cfg", 24, 2, 884}, {"boost_ball_net.cfg", 12, 2, 125},
     {"ball_net.cfg", 26, 2, 444},  {"ori_boost_net.cfg", 12, 2, 246},
-    {"ori_net.cfg", 24, 3, 657},
+    {"ori_net.cfg", 24, 4, 657},  // front, back, side facing left, side facing right
 };
 
 TEST(CnnNet, ShippedNetsHaveThePapersSizesAndParameterCounts) {

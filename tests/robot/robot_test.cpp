@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
@@ -227,6 +228,53 @@ TEST(Cns, SameResponseUnderTwoIlluminationLevels) {
   }
   EXPECT_NEAR(a.gyAt(30, 10), 0.0, 1e-6);
   EXPECT_NEAR(a.gx[32 * 64 + 30], 0.0, 1e-6);
+}
+
+// The definition, pixel by pixel in double with clamped reads: Sobel / sqrt(64 · variance + σ²)
+// over the (2r+1)² window.
+double cnsReference(const GrayImage& img, int x, int y, int r, double sigma, bool vertical) {
+  auto px = [&](int i, int j) -> double {
+    return img.at(std::clamp(i, 0, img.width() - 1), std::clamp(j, 0, img.height() - 1));
+  };
+  const double g = vertical ? (px(x - 1, y + 1) + 2 * px(x, y + 1) + px(x + 1, y + 1)) -
+                                  (px(x - 1, y - 1) + 2 * px(x, y - 1) + px(x + 1, y - 1))
+                            : (px(x + 1, y - 1) + 2 * px(x + 1, y) + px(x + 1, y + 1)) -
+                                  (px(x - 1, y - 1) + 2 * px(x - 1, y) + px(x - 1, y + 1));
+  double s = 0, s2 = 0;
+  for (int j = -r; j <= r; ++j)
+    for (int i = -r; i <= r; ++i) {
+      s += px(x + i, y + j);
+      s2 += px(x + i, y + j) * px(x + i, y + j);
+    }
+  const double n = (2 * r + 1) * (2 * r + 1);
+  const double var = std::max(0.0, s2 / n - (s / n) * (s / n));
+  return g / std::sqrt(64 * var + sigma * sigma);
+}
+
+TEST(Cns, MatchesTheDefinitionInsideAndAtTheImageBorder) {
+  GrayImage img(40, 30);
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> v(0, 255);
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) img.at(x, y) = static_cast<std::uint8_t>(v(rng));
+  // Regions inside, touching every border, and cut by the image (clamped to it).
+  struct Region {
+    int x0, y0, w, h, r;
+  };
+  for (const Region& g : {Region{5, 4, 20, 15, 2}, Region{0, 0, 40, 30, 2}, Region{-3, 20, 12, 20, 3},
+                          Region{30, -2, 15, 8, 1}, Region{10, 10, 7, 5, 4}}) {
+    const CnsImage c = contrastNormalizedSobel(img.view(), g.x0, g.y0, g.w, g.h, g.r, 40.0);
+    ASSERT_GT(c.width, 0);
+    ASSERT_GT(c.height, 0);
+    EXPECT_EQ(c.x0, std::max(g.x0, 0));
+    EXPECT_EQ(c.y0, std::max(g.y0, 0));
+    for (int y = c.y0; y < c.y0 + c.height; ++y)
+      for (int x = c.x0; x < c.x0 + c.width; ++x) {
+        const std::size_t k = static_cast<std::size_t>(y - c.y0) * c.width + (x - c.x0);
+        ASSERT_NEAR(c.gy[k], cnsReference(img, x, y, g.r, 40.0, true), 1e-4) << x << "," << y << " r=" << g.r;
+        ASSERT_NEAR(c.gx[k], cnsReference(img, x, y, g.r, 40.0, false), 1e-4) << x << "," << y << " r=" << g.r;
+      }
+  }
 }
 
 RobotOrientationEstimator untrainedEstimator() {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "colorfree/perception/orientation/geometry.h"
 #include "colorfree/perception/orientation/orientation_filter.h"
@@ -135,6 +136,50 @@ TEST(OrientationFromLine, FrontFacesTheObserverBackFacesAway) {
   const auto side = orientationFromLine({1.1, -0.1}, {1.1, 0.1}, RobotSide::kSide, pos);
   EXPECT_FALSE(side.facing_known);
   EXPECT_NEAR(std::abs(side.angle_rad), kPi / 2, 1e-12);
+}
+
+TEST(OrientationFromSideLine, FacesTheObserversLeftOrRight) {
+  // A robot 1.2 m ahead, its foot's long side along y: the observer's left is +y.
+  const Eigen::Vector2d pos(1.2, 0);
+  for (const auto& [a, b] : {std::pair<Eigen::Vector2d, Eigen::Vector2d>{{1.1, -0.1}, {1.1, 0.1}},
+                             {{1.1, 0.1}, {1.1, -0.1}}}) {
+    const auto left = orientationFromSideLine(a, b, true, pos);
+    EXPECT_TRUE(left.facing_known);
+    EXPECT_NEAR(left.angle_rad, kPi / 2, 1e-12);
+    const auto right = orientationFromSideLine(a, b, false, pos);
+    EXPECT_TRUE(right.facing_known);
+    EXPECT_NEAR(right.angle_rad, -kPi / 2, 1e-12);
+  }
+  // Seen at a bearing of 45°: the observer's left there points to (-1, 1); a line along it.
+  const Eigen::Vector2d diag(1, 1);
+  const auto l = orientationFromSideLine({1.05, 0.95}, {0.95, 1.05}, true, diag);
+  EXPECT_NEAR(l.angle_rad, 3 * kPi / 4, 1e-9);
+  const auto r = orientationFromSideLine({1.05, 0.95}, {0.95, 1.05}, false, diag);
+  EXPECT_NEAR(r.angle_rad, -kPi / 4, 1e-9);
+  // A side line slightly off the lateral direction keeps its own direction.
+  const auto tilted = orientationFromSideLine({1.2, 0}, {1.2 + 0.1 * std::sin(0.2), 0.1 * std::cos(0.2)}, true, pos);
+  EXPECT_NEAR(tilted.angle_rad, kPi / 2 - 0.2, 1e-9);
+}
+
+TEST(ConsistencyCheck, SideLinesWithAFacing) {
+  // A side line alone whose facing OriNet saw: its estimate, facing known.
+  const auto alone = combineLineOrientations({{1.0, true}}, {RobotSide::kSide});
+  ASSERT_TRUE(alone);
+  EXPECT_TRUE(alone->facing_known);
+  EXPECT_DOUBLE_EQ(alone->angle_rad, 1.0);
+  // Its facing disagrees with the front line's: not trusted.
+  EXPECT_FALSE(combineLineOrientations({{1.0, true}, {1.0 - kPi + 0.1, true}},
+                                       {RobotSide::kSide, RobotSide::kFront}));
+  // It agrees: the side line (first, best voted) gives the angle.
+  const auto agree = combineLineOrientations({{1.0, true}, {0.8, true}}, {RobotSide::kSide, RobotSide::kFront});
+  ASSERT_TRUE(agree);
+  EXPECT_DOUBLE_EQ(agree->angle_rad, 1.0);
+  // A front line first and a side line with a facing second: the front line's estimate.
+  const auto front_first = combineLineOrientations({{0.5, true}, {0.6, true}}, {RobotSide::kFront, RobotSide::kSide});
+  ASSERT_TRUE(front_first);
+  EXPECT_DOUBLE_EQ(front_first->angle_rad, 0.5);
+  // Two side lines stay inconsistent whatever their facings.
+  EXPECT_FALSE(combineLineOrientations({{1.0, true}, {1.0, false}}, {RobotSide::kSide, RobotSide::kSide}));
 }
 
 TEST(ConsistencyCheck, AtMostOneOfEachClass) {

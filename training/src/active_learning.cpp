@@ -205,7 +205,7 @@ LearnResult learn(const ObjectKind& kind, const LearnConfig& config,
       cnn::Net start = st.net;
       cnn::TrainerParams tp = config.trainer;
       if (!st.trained) start.initialise(tp.seed);
-      tp.augmentation.flip_allowed.assign(kind.classNames().size(), true);
+      tp.augmentation.flip_allowed = kind.flipAllowed();
       const cnn::TrainResult tr = cnn::train(start, st.data, st.validation, tp);
       st.net = tr.net;
       st.trained = true;

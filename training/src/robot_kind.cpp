@@ -104,7 +104,12 @@ std::vector<std::string> RobotKind::classNames() const {
     case RobotNetChoice::kOriNet:
       break;
   }
-  return {"front", "back", "side"};
+  return {"front", "back", "side_left", "side_right"};
+}
+
+std::vector<bool> RobotKind::flipAllowed() const {
+  if (which_ == RobotNetChoice::kOriNet) return {true, true, false, false};
+  return std::vector<bool>(classNames().size(), true);
 }
 
 std::vector<std::string> RobotKind::netStems() const {
@@ -185,14 +190,16 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
         continue;
       }
       if (off_deg > rules_.classed_max_deg) continue;  // OriNet only sees usable regions
+      const Eigen::Vector2d facing(std::cos(r.heading_in_observer_rad),
+                                   std::sin(r.heading_in_observer_rad));
       if (diff < std::numbers::pi / 4) {
-        c.label = 2;  // along the heading: a side of the robot
+        // Along the heading: a side of the robot, facing the observer's left (2) or right (3).
+        const Eigen::Vector2d left(-position.y(), position.x());
+        c.label = facing.dot(left) > 0 ? 2 : 3;
       } else {
         // Across the heading: front when the robot faces the observer's side of the line.
         Eigen::Vector2d normal(-d.y(), d.x());
         if (normal.dot(-position) < 0) normal = -normal;
-        const Eigen::Vector2d facing(std::cos(r.heading_in_observer_rad),
-                                     std::sin(r.heading_in_observer_rad));
         c.label = facing.dot(normal) > 0 ? 0 : 1;
       }
       out.push_back(c);

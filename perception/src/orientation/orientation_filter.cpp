@@ -24,6 +24,15 @@ RobotOrientation orientationFromLine(const Eigen::Vector2d& a, const Eigen::Vect
   return o;
 }
 
+RobotOrientation orientationFromSideLine(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                         bool faces_left, const Eigen::Vector2d& robot_position) {
+  Eigen::Vector2d dir = (b - a).normalized();
+  // The observer's left at the robot: the line of sight turned by +90°.
+  const Eigen::Vector2d left(-robot_position.y(), robot_position.x());
+  if ((dir.dot(left) > 0) != faces_left) dir = -dir;
+  return RobotOrientation{wrapAngle(std::atan2(dir.y(), dir.x())), true};
+}
+
 bool classesConsistent(const std::vector<RobotSide>& classes) {
   std::array<int, 3> count{};
   for (RobotSide c : classes) {
@@ -36,10 +45,10 @@ std::optional<RobotOrientation> combineLineOrientations(
     const std::vector<RobotOrientation>& orientations, const std::vector<RobotSide>& classes) {
   if (orientations.empty() || orientations.size() != classes.size()) return std::nullopt;
   if (!classesConsistent(classes)) return std::nullopt;
-  // Front and back together must agree on the facing; otherwise the estimate is not trusted.
+  // Every facing-known estimate must agree on the facing; otherwise the estimate is not trusted.
   std::optional<RobotOrientation> facing;
   for (std::size_t i = 0; i < classes.size(); ++i) {
-    if (classes[i] == RobotSide::kSide) continue;
+    if (!orientations[i].facing_known) continue;
     if (facing && std::abs(wrapAngle(facing->angle_rad - orientations[i].angle_rad)) > std::numbers::pi / 4) {
       return std::nullopt;
     }

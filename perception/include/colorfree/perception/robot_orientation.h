@@ -37,18 +37,20 @@ struct RobotOrientationParams {
   int silhouette_min_rows = 2;               ///< ... on this many rows in a row (noise answers on one)
   int silhouette_neighbour_rows_px = 2;      ///< edge points on neighbouring scan lines this close chain
   int silhouette_min_chain_px = 4;           ///< a silhouette point's chain spans at least this many scan lines ...
-  double silhouette_min_chain_fraction = 0.06;  ///< ... and this fraction of the robot box's width
+  double silhouette_min_chain_fraction = 0.12;  ///< ... and this fraction of the robot box's width
   double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
   double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
   double second_line_min_length_m = 0.04;
   double second_line_max_length_m = 0.25;
   double second_line_max_cos = 0.35;
+  double second_line_max_refined_cos = 0.25;  ///< the same bound after both lines are refitted
   double min_line_votes = 6;                 ///< a line with fewer votes is not classified
   double region_margin_fraction = 0.25;      ///< region: line width grown by this at both ends
   double region_above_fraction = 0.35;       ///< region height above the line, in robot heights
   double region_below_fraction = 0.06;       ///< below the line, in robot heights
   double min_usable_confidence = 0.5;        ///< OriBoostNet's usable probability needed
-  double min_side_confidence = 0.5;          ///< OriNet's best class probability needed
+  double min_side_confidence = 0.5;          ///< OriNet's best class probability needed (its two side classes summed)
+  double min_side_facing_share = 0.8;        ///< a side region's facing is known when one side class has this share of the side probability
   double track_max_distance_m = 0.5;         ///< association of a percept with a track
   double track_expiry_s = 1.0;               ///< a track and its estimate expire after this without samples
   int filter_buffer_size = 11;
@@ -65,6 +67,10 @@ struct LineRegion {
   float usable = 0;              ///< OriBoostNet's usable probability (0 when not run)
   std::optional<RobotSide> side; ///< OriNet's class when the region was usable
   float side_confidence = 0;
+  /// For a side region: OriNet saw which way the robot faces along the line (its classes 2 and
+  /// 3: towards the observer's left, to its right), and `faces_left` says which.
+  bool side_facing_known = false;
+  bool faces_left = false;
 };
 
 /// The lines generator's output for one robot.

@@ -31,6 +31,9 @@ class ObjectKind {
   virtual ~ObjectKind() = default;
   virtual std::string name() const = 0;
   virtual std::vector<std::string> classNames() const = 0;
+  /// Per class: whether a horizontally mirrored sample keeps its label (the trainer's flip
+  /// augmentation). Default: every class.
+  virtual std::vector<bool> flipAllowed() const { return std::vector<bool>(classNames().size(), true); }
   /// Net stems in perception/models that learn from these samples, first the one whose errors
   /// are reported first (all share the candidates; each cuts them at its own input size).
   virtual std::vector<std::string> netStems() const = 0;

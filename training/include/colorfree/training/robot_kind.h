@@ -14,7 +14,7 @@ namespace colorfree::training {
 enum class RobotNetChoice {
   kRobotNet,     ///< RobotNet: the real RobotProposer's boxes, robot or none
   kOriBoostNet,  ///< OriBoostNet: the lines generator's regions, usable line or not
-  kOriNet,       ///< OriNet: usable regions, front, back or side of the robot
+  kOriNet,       ///< OriNet: usable regions, front, back or side (facing the observer's left or right)
 };
 
 /// Labelling rules for the robot kinds (angles between a line and the true heading's axis or its
@@ -40,8 +40,11 @@ class RobotKind : public ObjectKind {
   std::string name() const override;
   std::vector<std::string> classNames() const override;
   std::vector<std::string> netStems() const override;
+  /// OriNet's side classes say which way the robot faces in the image: a mirrored side region
+  /// faces the other way, so only front and back (and the other nets' classes) may be flipped.
+  std::vector<bool> flipAllowed() const override;
   /// RobotNet: robot (1) and none (0). The orientation nets have no object-free scenes to
-  /// bootstrap on; their labels here are usable/unusable and front/side.
+  /// bootstrap on; their labels here are usable/unusable and front/side (facing left).
   int positiveLabel() const override { return 1; }
   int negativeLabel() const override { return which_ == RobotNetChoice::kOriNet ? 2 : 0; }
   std::vector<Candidate> proposals(const GrayImage& image, const CameraModel& camera,

@@ -14,7 +14,7 @@ struct ShippedNet {
   const char* name;  ///< the paper's name
   const char* stem;  ///< file name without extension
   int input_side;
-  std::array<const char*, 3> classes;  ///< label order; unused entries null
+  std::array<const char*, 4> classes;  ///< label order; unused entries null
   int paper_parameters;
   double paper_time_ms;
   double paper_accuracy;
@@ -31,11 +31,11 @@ struct ShippedNet {
 };
 
 inline constexpr ShippedNet kShippedNets[] = {
-    {"RobotNet", "robot_net", 24, {"none", "robot", nullptr}, 884, 0.382, 0.969},
-    {"BoostBallNet", "boost_ball_net", 12, {"none", "ball", nullptr}, 125, 0.043, 0.965},
-    {"BallNet", "ball_net", 26, {"none", "ball", nullptr}, 444, 0.343, 0.984},
-    {"OriBoostNet", "ori_boost_net", 12, {"unusable", "usable", nullptr}, 246, 0.059, 0.962},
-    {"OriNet", "ori_net", 24, {"front", "back", "side"}, 657, 0.329, 0.984},
+    {"RobotNet", "robot_net", 24, {"none", "robot", nullptr, nullptr}, 884, 0.382, 0.969},
+    {"BoostBallNet", "boost_ball_net", 12, {"none", "ball", nullptr, nullptr}, 125, 0.043, 0.965},
+    {"BallNet", "ball_net", 26, {"none", "ball", nullptr, nullptr}, 444, 0.343, 0.984},
+    {"OriBoostNet", "ori_boost_net", 12, {"unusable", "usable", nullptr, nullptr}, 246, 0.059, 0.962},
+    {"OriNet", "ori_net", 24, {"front", "back", "side_left", "side_right"}, 657, 0.329, 0.984},
 };
 
 }  // namespace colorfree::cnn

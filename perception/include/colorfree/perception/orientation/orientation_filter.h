@@ -16,14 +16,22 @@ namespace colorfree {
 RobotOrientation orientationFromLine(const Eigen::Vector2d& line_a, const Eigen::Vector2d& line_b,
                                      RobotSide side, const Eigen::Vector2d& robot_position);
 
+/// The orientation a side line gives when OriNet also saw which way the robot faces along it:
+/// towards the observer's left (`faces_left`, image left) or right. Facing known. `line_*` and
+/// `robot_position` in the observer's robot frame.
+RobotOrientation orientationFromSideLine(const Eigen::Vector2d& line_a, const Eigen::Vector2d& line_b,
+                                         bool faces_left, const Eigen::Vector2d& robot_position);
+
 /// The paper's consistency check: at most one region of each class.
 bool classesConsistent(const std::vector<RobotSide>& classes);
 
 /// Combines the orientations of one robot's classified line regions (the first line, the best
-/// voted, first) into one estimate: a front or back line decides the facing; when the first line
-/// is a side line within 45° of that facing, the estimate is its axis turned to the facing (the
-/// best-voted line is the most precise); side lines alone give only the axis. Empty when the
-/// classes are inconsistent or there is nothing.
+/// voted, first) into one estimate: every facing-known estimate (front, back, or a side line whose
+/// facing OriNet saw) must agree within 45°, else the estimate is not trusted (empty); the first
+/// facing-known one decides the facing; when the first line is a side line within 45° of that
+/// facing, the estimate is its axis turned to the facing (the best-voted line is the most
+/// precise); side lines without a facing give only the axis. Empty when the classes are
+/// inconsistent or there is nothing.
 std::optional<RobotOrientation> combineLineOrientations(
     const std::vector<RobotOrientation>& orientations, const std::vector<RobotSide>& classes);
 
