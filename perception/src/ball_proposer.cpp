@@ -437,7 +437,8 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       // instead, so the grid of the largest radii is the windows' grid.
       const bool coarse = rc.x0 + (step - 1) / 2 >= rc.x1;
       const int x_start = coarse ? (rc.x0 + rc.x1) / 2 : rc.x0 + (step - 1) / 2;
-      const int yy = coarse && y == rc.y0 ? (rc.y0 + rc.y1) / 2 : std::min(y + (step - 1) / 2, rc.y1 - 1);
+      const int yy = coarse && y == rc.y0 ? (rc.y0 + rc.y1) / 2
+                                          : std::min(y + (step - 1) / 2, rc.y1 - 1);
       // No box of this row needs clamping: the fast path (the print term needs the general one).
       const bool inside = p.print_weight <= 0 && x_start - scale.b >= rx0 && rc.x1 - 1 + scale.b <= rx1 &&
                           yy - scale.b >= ry0 && yy + scale.b <= ry1;

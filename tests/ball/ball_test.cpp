@@ -98,7 +98,9 @@ TEST_P(CloseBallAt, Proposed) {
   const CameraModel cam = test::testCamera(c.pitch_deg, 640, 480, 0.47);
   GrayImage image = test::renderScene(cam, carpetOnly(11));
   const test::DrawnBall b = test::drawBall(image, cam, {c.x_m, c.y_m});
-  if (std::getenv("BALL_TEST_DUMP")) writeGrayPng(std::string(std::getenv("BALL_TEST_DUMP")) + ".png", image.view());
+  if (std::getenv("BALL_TEST_DUMP")) {
+    writeGrayPng(std::string(std::getenv("BALL_TEST_DUMP")) + ".png", image.view());
+  }
   const Found f = runPipeline(image, cam);
   EXPECT_GE(matchIndex(f.proposals, b), 0) << "no proposal at the ball (" << b.centre_px.transpose()
                                            << "), r=" << b.radius_px << describe(f.proposals);
