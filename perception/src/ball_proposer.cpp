@@ -432,8 +432,13 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       const double r = *rad;
       const int step = std::max(1, static_cast<int>(p.step_fraction * r));
       const Scale scale = scaleAt(r, p);
-      const int x_start = rc.x0 + (step - 1) / 2;
-      const int yy = std::min(y + (step - 1) / 2, rc.y1 - 1);
+      // The first position half a step in; a step wider than the rectangle (a 16-px window and
+      // an expected radius of 66 px or more) would leave it out: one evaluation at its middle
+      // instead, so the grid of the largest radii is the windows' grid.
+      const bool coarse = rc.x0 + (step - 1) / 2 >= rc.x1;
+      const int x_start = coarse ? (rc.x0 + rc.x1) / 2 : rc.x0 + (step - 1) / 2;
+      const int yy = coarse && y == rc.y0 ? (rc.y0 + rc.y1) / 2
+                                          : std::min(y + (step - 1) / 2, rc.y1 - 1);
       // No box of this row needs clamping: the fast path (the print term needs the general one).
       const bool inside = p.print_weight <= 0 && x_start - scale.b >= rx0 && rc.x1 - 1 + scale.b <= rx1 &&
                           yy - scale.b >= ry0 && yy + scale.b <= ry1;

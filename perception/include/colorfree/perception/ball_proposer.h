@@ -20,14 +20,17 @@ struct BallProposerParams {
   double off_axis_exponent = 1.5;
   double min_radius_px = 2.4;       ///< positions where the ball would be smaller are skipped
   double max_radius_px = 90.0;      ///< positions where the ball would be larger are skipped
-  /// Scan step in pixels: max(1, floor(step_fraction × expected radius)).
+  /// Scan step in pixels: max(1, floor(step_fraction × expected radius)), along x and y inside
+  /// every scanned window; the first position half a step in, clamped into the window, so a step
+  /// wider than the window (large radii) gives one evaluation per window.
   double step_fraction = 0.5;
   /// Difference of box filters (a box-shaped DoG): the centre box has half-side
   /// inner_fraction × r, the surround box half-side outer_fraction × r; the response is the centre
   /// mean minus the surround, taken over the 3×3 grid of cells these boxes make: of the four pairs
   /// of opposite surround cells, the brightest pair's darker cell (a line through the centre lights
   /// both cells of a pair, an object beside the ball only one) or the ring's mean if larger.
-  /// The winners are refined at single pixels within one scan step.
+  /// The winners are not refined on the pixel grid; the kept proposals are re-centred by the
+  /// gradient voting below (centre_search_fraction).
   double inner_fraction = 0.65;
   double outer_fraction = 1.6;
   /// The ball's black print: the spread (brightest minus darkest mean) of the centre box's four
@@ -69,11 +72,12 @@ struct BallProposerParams {
   static BallProposerParams loadDefault();
 };
 
-/// Ball proposals (paper 2.4): a pixel-wise scan of the high-contrast windows (and the regions in
-/// front of detected robots' feet) with box Difference-of-Gaussians filters whose supports follow
-/// the ball's expected radius from the camera model, evaluated on an integral image; the strongest
-/// responses per window survive non-maximum suppression, sorted by response, capped in count;
-/// a few slots are kept for the best on-line candidates (a ball lying on a line).
+/// Ball proposals (paper 2.4): a scan (positions step_fraction × the expected radius apart) of
+/// the high-contrast windows (and the regions in front of detected robots' feet) with box
+/// Difference-of-Gaussians filters whose supports follow the ball's expected radius from the camera
+/// model, evaluated on an integral image; the strongest responses per window survive non-maximum
+/// suppression, sorted by response, capped in count; a few slots are kept for the best on-line
+/// candidates (a ball lying on a line).
 class BallProposer {
  public:
   explicit BallProposer(BallProposerParams params = {});
