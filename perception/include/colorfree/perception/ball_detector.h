@@ -17,7 +17,7 @@ struct BallDetectorParams {
   /// Side of the square patch cut around a proposal, in ball diameters (both nets, and training).
   double patch_diameters = 1.25;
   int boost_keep_count = 5;              ///< BoostBallNet passes at most this many to BallNet
-  double boost_min_confidence = 0.2;     ///< ... and only those with at least this "ball" score
+  double boost_min_confidence = 0.05;    ///< ... and only those with at least this "ball" score
   double ball_min_confidence = 0.5;      ///< BallNet's "ball" score for a detection
   int max_balls = 1;                     ///< detections per frame at most (the strongest)
 
