@@ -405,7 +405,8 @@ void printBenchTables(const json& results) {
   }
   if (results.contains("cnn_table") && !results.at("cnn_table").empty()) {
     std::printf("\nTable 1: CNN classifiers (time: this machine, one core, median; accuracy: on the detection set's\n"
-                "samples that reach each net, their count in brackets)\n");
+                "samples that reach each net, their count in brackets; samples on a ball or robot too hidden to\n"
+                "demand, which training leaves out too, are left out)\n");
     std::printf("  %-13s %-8s %15s %10s %10s %9s %-17s %6s\n", "net", "input", "params (paper)", "us single",
                 "us batch16", "paper ms", "accuracy", "paper");
     for (const auto& r : results.at("cnn_table")) {

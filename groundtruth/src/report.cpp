@@ -341,13 +341,15 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
       {"OriNet", "24&times;24&times;1, 657 params, 0.329 ms, 0.984"}};
   h << "<h2>CNN classifiers (paper's Table 1): accuracy on the samples that reached "
        "each</h2><table><tr><th>model</th>"
-       "<th>accuracy, ours</th><th>samples</th><th class=paper>paper: input, parameters, time, "
+       "<th>accuracy, ours</th><th>samples</th><th>left out (on an object too hidden to demand)</th>"
+       "<th class=paper>paper: input, parameters, time, "
        "accuracy</th></tr>";
   for (auto it = at(r, "cnn").begin(); it != at(r, "cnn").end(); ++it) {
     const auto p = kPaperCnn.find(it.key());
     const bool present = it.value().value("samples", 0L) > 0;
     h << "<tr><td>" << esc(it.key()) << "</td><td>" << cell(it.value()["accuracy"], present, 3)
-      << "</td><td>" << it.value().value("samples", 0L) << "</td><td class=paper>"
+      << "</td><td>" << it.value().value("samples", 0L) << "</td><td>"
+      << it.value().value("ambiguous", 0L) << "</td><td class=paper>"
       << (p != kPaperCnn.end() ? p->second : "&ndash;") << "</td></tr>";
   }
   h << "</table>";

@@ -44,6 +44,7 @@ struct TimeTally {
 
 struct ClassifierTally {
   long samples = 0, correct = 0, true_pos = 0, false_pos = 0, false_neg = 0;
+  long ambiguous = 0;  ///< samples on an object too hidden or too small to demand: left out
 };
 
 using ClassCounts = std::array<long, kOrientationClassCount>;
@@ -178,7 +179,8 @@ json tallyJson(const Tally& t, const ScoringParams& p) {
                  {"samples", c.samples},
                  {"true_positives", c.true_pos},
                  {"false_positives", c.false_pos},
-                 {"false_negatives", c.false_neg}};
+                 {"false_negatives", c.false_neg},
+                 {"ambiguous", c.ambiguous}};
   }
   j["cnn"] = cnn;
   j["by_distance"] = {{"ball", distanceJson(t.ball_by_distance, p.distance_bin_m)},
@@ -740,16 +742,29 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     }
   }
 
+  // A sample's label, as the detection scoring and the training loop see it: on an object that
+  // should be detected, positive; on an object in view that is too hidden or too small to demand,
+  // neither (the detector may take it or not: a percept there is no false positive either), so it
+  // is left out of the accuracy and counted as ambiguous; elsewhere, negative.
   for (const auto& s : pc.classifier_samples) {
-    bool label = false;
+    bool on_demanded = false, on_other = false;
     if (s.object == ClassifierSample::Object::kBall) {
-      for (const auto& b : balls) label = label || ballMatchCost(b, s.centre_px, p).has_value();
+      for (const auto& b : balls) {
+        if (ballMatchCost(b, s.centre_px, p)) (b.should_detect ? on_demanded : on_other) = true;
+      }
     } else {
-      for (const auto* r : robots)
-        label = label || robotMatchCost(*r, s.box, feetInField(s.feet_px), p).has_value();
+      for (const auto* r : robots) {
+        if (robotMatchCost(*r, s.box, feetInField(s.feet_px), p))
+          (r->should_detect ? on_demanded : on_other) = true;
+      }
     }
+    const bool label = on_demanded;
     for (Tally* t : tallies) {
       auto& c = t->classifiers[s.classifier];
+      if (!on_demanded && on_other) {
+        ++c.ambiguous;
+        continue;
+      }
       ++c.samples;
       c.correct += label == s.predicted_positive;
       c.true_pos += label && s.predicted_positive;
@@ -894,7 +909,7 @@ json tallyState(const Tally& t) {
   for (const auto& [name, tt] : t.timing) timing[name] = {tt.n, tt.sum, tt.max};
   j["timing"] = timing;
   json cls = json::object();
-  for (const auto& [name, c] : t.classifiers) cls[name] = {c.samples, c.correct, c.true_pos, c.false_pos, c.false_neg};
+  for (const auto& [name, c] : t.classifiers) cls[name] = {c.samples, c.correct, c.true_pos, c.false_pos, c.false_neg, c.ambiguous};
   j["classifiers"] = cls;
   return j;
 }
@@ -928,7 +943,7 @@ Tally tallyFromState(const json& j) {
   for (auto it = j.at("classifiers").begin(); it != j.at("classifiers").end(); ++it) {
     const json& c = it.value();
     t.classifiers[it.key()] = {c.at(0).get<long>(), c.at(1).get<long>(), c.at(2).get<long>(), c.at(3).get<long>(),
-                               c.at(4).get<long>()};
+                               c.at(4).get<long>(), c.at(5).get<long>()};
   }
   return t;
 }
@@ -1002,6 +1017,7 @@ void addTally(Tally& a, const Tally& b) {
     c.true_pos += v.true_pos;
     c.false_pos += v.false_pos;
     c.false_neg += v.false_neg;
+    c.ambiguous += v.ambiguous;
   }
 }
 

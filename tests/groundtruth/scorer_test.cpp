@@ -316,6 +316,37 @@ TEST(Scorer, FieldFeaturesPoseTimingAndClassifiers) {
   EXPECT_TRUE(r["cnn"]["RobotNet"]["accuracy"].is_null());
 }
 
+// A classifier sample on an object too hidden to demand is neither right nor wrong: it is left
+// out of the accuracy and counted as ambiguous (the training loop leaves such samples out too).
+TEST(Scorer, ClassifierSamplesOnUndemandedObjectsAreLeftOut) {
+  Scorer s(ScoringParams{}, FieldDimensions{});
+  FrameTruth hidden = ballFrame(/*should_detect=*/false);
+  RobotInImage seen = robotTruth(0, 0, 0), cut = robotTruth(1, 0, 0);
+  cut.should_detect = false;
+  cut.visible_fraction = 0.2;
+  hidden.robots = {seen, cut};
+  FramePercepts p;
+  p.classifier_samples = {
+      {"BallNet", ClassifierSample::Object::kBall, {100, 101}, {}, {}, false},  // hidden ball: left out
+      {"BallNet", ClassifierSample::Object::kBall, {30, 30}, {}, {}, false},    // carpet, right
+      {"RobotNet", ClassifierSample::Object::kRobot, {}, seen.box, {}, false},  // demanded: wrong
+      {"RobotNet", ClassifierSample::Object::kRobot, {}, cut.box, {}, false},   // hidden: left out
+      {"RobotNet", ClassifierSample::Object::kRobot, {}, {400, 50, 440, 130}, {}, false}};  // right
+  s.addFrame(hidden, p, nullptr);
+  FramePercepts q;
+  q.classifier_samples = {p.classifier_samples[0]};
+  s.addFrame(ballFrame(/*should_detect=*/true), q, nullptr);  // on a demanded ball: a false negative
+  const json r = s.results({});
+  EXPECT_EQ(r["cnn"]["BallNet"]["samples"], 2);
+  EXPECT_EQ(r["cnn"]["BallNet"]["ambiguous"], 1);
+  EXPECT_EQ(r["cnn"]["BallNet"]["false_negatives"], 1);
+  EXPECT_DOUBLE_EQ(r["cnn"]["BallNet"]["accuracy"], 0.5);
+  EXPECT_EQ(r["cnn"]["RobotNet"]["samples"], 2);
+  EXPECT_EQ(r["cnn"]["RobotNet"]["ambiguous"], 1);
+  EXPECT_EQ(r["cnn"]["RobotNet"]["false_negatives"], 1);
+  EXPECT_DOUBLE_EQ(r["cnn"]["RobotNet"]["accuracy"], 0.5);
+}
+
 TEST(Scorer, EveryMetricPerCase) {
   Scorer s(ScoringParams{}, FieldDimensions{});
   FramePercepts hit;
