@@ -1,6 +1,7 @@
 #include "colorfree/perception/ball_detector.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "colorfree/perception/cnn/net.h"
@@ -18,6 +19,7 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.boost_min_confidence = f.getInRange("boost_min_confidence", 0, 1);
   p.ball_min_confidence = f.getInRange("ball_min_confidence", 0, 1);
   p.max_balls = static_cast<int>(f.getInRange("max_balls", 1, 100));
+  p.max_centre_outside_radii = f.getInRange("max_centre_outside_radii", 0, 100);
   f.finish();
   return p;
 }
@@ -30,6 +32,12 @@ cnn::PatchBox ballPatchBox(const Eigen::Vector2d& centre_px, double radius_px, d
   const double side = std::max(2.0, 2 * radius_px * patch_diameters);
   return {static_cast<float>(centre_px.x() - side / 2), static_cast<float>(centre_px.y() - side / 2),
           static_cast<float>(side), static_cast<float>(side)};
+}
+
+double centreOutsideRadii(const Eigen::Vector2d& centre_px, double radius_px, int width, int height) {
+  const double dx = std::max({0.0, -centre_px.x(), centre_px.x() - width});
+  const double dy = std::max({0.0, -centre_px.y(), centre_px.y() - height});
+  return std::hypot(dx, dy) / std::max(radius_px, 1e-9);
 }
 
 BallDetector::BallDetector(BallDetectorParams params, cnn::Classifier boost_net, cnn::Classifier ball_net)
@@ -66,6 +74,10 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   for (int i : order) {
     if (static_cast<int>(kept.size()) >= params_.boost_keep_count) break;
     if (boost_prob[2 * i + 1] < params_.boost_min_confidence) break;
+    if (centreOutsideRadii(proposals[i].centre_px, proposals[i].radius_px, image.width,
+                           image.height) > params_.max_centre_outside_radii) {
+      continue;
+    }
     kept.push_back(i);
   }
   std::vector<float> ball_prob;

@@ -166,6 +166,36 @@ TEST(BallDetection, NothingOnALoneLineCrossing) {
   EXPECT_TRUE(f.balls.empty());
 }
 
+// Less than about half a ball in view: a proposal centred outside the image by more than
+// max_centre_outside_radii is not passed on to BallNet, whatever BoostBallNet says of it.
+TEST(BallDetector, ProposalsCentredOutsideTheImageAreNotPassedOn) {
+  EXPECT_DOUBLE_EQ(centreOutsideRadii({100, 100}, 10, 320, 240), 0);
+  EXPECT_DOUBLE_EQ(centreOutsideRadii({150, -2}, 10, 320, 240), 0.2);
+  EXPECT_DOUBLE_EQ(centreOutsideRadii({326, 100}, 10, 320, 240), 0.6);
+  EXPECT_DOUBLE_EQ(centreOutsideRadii({-3, 244}, 10, 320, 240), 0.5);
+  const CameraModel cam = test::testCamera(22);
+  const GrayImage image = test::renderScene(cam, carpetOnly(9));
+  ASSERT_EQ(image.width(), 640);
+  ASSERT_EQ(image.height(), 480);
+  const std::vector<BallProposal> props = {
+      {{100, 100}, 10, 1}, {{150, -2}, 10, 1}, {{646, 100}, 10, 1}, {{-3, 484}, 10, 1}};
+  BallDetectorParams p;
+  p.boost_min_confidence = 0;  // every proposal BoostBallNet ranks may pass: only the image rule decides
+  p.boost_keep_count = 10;
+  std::vector<BallDecision> d;
+  BallDetector::load(p).run(image.view(), cam, props, &d);
+  ASSERT_EQ(d.size(), props.size());
+  EXPECT_TRUE(d[0].passed_boost);
+  EXPECT_TRUE(d[1].passed_boost);  // 0.2 radii out: within the 0.25 allowed
+  EXPECT_FALSE(d[2].passed_boost);
+  EXPECT_FALSE(d[2].detected);
+  EXPECT_EQ(d[2].ball_confidence, -1);
+  EXPECT_FALSE(d[3].passed_boost);
+  p.max_centre_outside_radii = 1;
+  BallDetector::load(p).run(image.view(), cam, props, &d);
+  for (const BallDecision& x : d) EXPECT_TRUE(x.passed_boost) << x.proposal;
+}
+
 TEST(BallProposer, WorksWithoutAndWithRobotsAndIsCapped) {
   const CameraModel cam = test::testCamera(22);
   test::SyntheticScene scene = carpetOnly(9);

@@ -20,6 +20,9 @@ struct BallDetectorParams {
   double boost_min_confidence = 0.05;    ///< ... and only those with at least this "ball" score
   double ball_min_confidence = 0.5;      ///< BallNet's "ball" score for a detection
   int max_balls = 1;                     ///< detections per frame at most (the strongest)
+  /// A proposal whose centre lies more than this × its radius outside the image shows less than
+  /// about half of a ball: it is not passed on to BallNet (nor reported).
+  double max_centre_outside_radii = 0.25;
 
   bool operator==(const BallDetectorParams&) const = default;
   static BallDetectorParams load(const std::string& path);
@@ -29,6 +32,10 @@ struct BallDetectorParams {
 /// The square patch the nets see for a ball of `radius_px` at `centre_px`.
 cnn::PatchBox ballPatchBox(const Eigen::Vector2d& centre_px, double radius_px,
                            double patch_diameters);
+
+/// How far `centre_px` lies outside an image of `width` × `height` pixels, in units of `radius_px`
+/// (0 inside; the image spans [0, width] × [0, height], pixel centres at +0.5).
+double centreOutsideRadii(const Eigen::Vector2d& centre_px, double radius_px, int width, int height);
 
 /// What the cascade decided for every proposal (for scoring, active learning and the report).
 struct BallDecision {
