@@ -273,6 +273,28 @@ std::string cnnAccuracy(const json& results, const json& row) {
 
 }  // namespace
 
+// The metrics of each detector in a "scenario" experiment (the hard sets), and its expectations.
+const std::vector<std::string> kScenarioMetrics = {"proposal_recall", "proposals_per_frame", "detection_rate",
+                                                   "false_positives_per_frame"};
+
+json scenarioSummary(const BenchExperiment& e, const json& r) {
+  json o = {{"experiment", e.id}, {"title", e.title}, {"frames", r.at("frame_count")}};
+  for (const std::string object : {"ball", "robot"}) {
+    json m = {{"should_detect", at(r, object + ".counts.should_detect")}};
+    for (const auto& k : kScenarioMetrics) m[k] = at(r, object + "." + k);
+    o[object] = m;
+  }
+  json unmet = json::array();
+  long total = 0;
+  for (const auto& x : r.value("expectations", json::array())) {
+    ++total;
+    if (!x.at("met").get<bool>()) unmet.push_back(x.at("text"));
+  }
+  o["expectations"] = total;
+  o["unmet"] = unmet;
+  return o;
+}
+
 json benchSummary(const BenchPlan& plan, const json& experiments) {
   json s;
   std::string id;
@@ -323,6 +345,13 @@ json benchSummary(const BenchPlan& plan, const json& experiments) {
     }
   }
   s["sweeps"] = sweeps;
+  json scenarios = json::array();
+  for (const auto& e : plan.experiments) {
+    if (e.role == ExperimentRole::kScenario && experiments.contains(e.id)) {
+      scenarios.push_back(scenarioSummary(e, experiments.at(e.id)));
+    }
+  }
+  s["scenarios"] = scenarios;
   return s;
 }
 
@@ -416,6 +445,35 @@ void printBenchTables(const json& results) {
                   r.at("input").get<std::string>().c_str(), params.c_str(), r.at("us_per_patch_single").get<double>(),
                   r.at("us_per_patch_batch16").get<double>(), r.at("paper_time_ms").get<double>(),
                   cnnAccuracy(results, r).c_str(), r.at("paper_accuracy").get<double>());
+    }
+  }
+  if (s.contains("scenarios") && !s.at("scenarios").empty()) {
+    std::printf("\nHard sets (each scenario's own expectations are the issues' targets)\n");
+    std::printf("  %-18s %6s %-6s %8s %9s %7s %9s %10s  %s\n", "experiment", "frames", "object", "demanded",
+                "recall", "props/f", "detection", "FP/frame", "expectations unmet");
+    for (const auto& sc : s.at("scenarios")) {
+      bool first = true;
+      for (const std::string object : {"ball", "robot"}) {
+        const json& m = sc.at(object);
+        const bool last = object == "robot";
+        if (!m.at("detection_rate").is_number() && !m.at("proposal_recall").is_number() && !(first && last)) {
+          continue;  // a row for a detector with something to demand; one row per experiment at least
+        }
+        std::string unmet;
+        if (first) {
+          for (const auto& u : sc.at("unmet")) unmet += (unmet.empty() ? "" : "; ") + u.get<std::string>();
+          if (unmet.empty()) unmet = "none (of " + std::to_string(sc.at("expectations").get<long>()) + ")";
+        }
+        std::printf("  %-18s %6s %-6s %8s %9s %7s %9s %10s  %s\n",
+                    first ? sc.at("experiment").get<std::string>().c_str() : "",
+                    first ? std::to_string(sc.at("frames").get<long>()).c_str() : "", object.c_str(),
+                    m.at("should_detect").is_number() ? std::to_string(m.at("should_detect").get<long>()).c_str()
+                                                      : "-",
+                    fmt(m.at("proposal_recall")).c_str(), fmt(m.at("proposals_per_frame"), 1).c_str(),
+                    fmt(m.at("detection_rate")).c_str(), fmt(m.at("false_positives_per_frame")).c_str(),
+                    unmet.c_str());
+        first = false;
+      }
     }
   }
   if (s.contains("sweeps") && !s.at("sweeps").empty()) {
@@ -544,7 +602,33 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
       << "</td><td class=paper>" << fmt(r.at("paper_time_ms")) << "</td><td>" << esc(cnnAccuracy(results, r))
       << "</td><td class=paper>" << fmt(r.at("paper_accuracy")) << "</td></tr>";
   }
-  h << "</table><h2 id=sweeps>Sweeps: where each detector falls below its target</h2>";
+  h << "</table>";
+  if (s.contains("scenarios") && !s.at("scenarios").empty()) {
+    h << "<h2>Hard sets</h2><table><tr><th>experiment</th><th>frames</th><th>object</th><th>demanded</th>"
+         "<th>proposal recall</th><th>proposals per frame</th><th>detection rate</th><th>false positives per "
+         "frame</th><th>expectations not met</th></tr>";
+    for (const auto& sc : s.at("scenarios")) {
+      bool first = true;
+      for (const std::string object : {"ball", "robot"}) {
+        const json& m = sc.at(object);
+        const bool last = object == "robot";
+        if (!m.at("detection_rate").is_number() && !m.at("proposal_recall").is_number() && !(first && last)) {
+          continue;
+        }
+        first = false;
+        std::string unmet;
+        for (const auto& u : sc.at("unmet")) unmet += (unmet.empty() ? "" : "; ") + u.get<std::string>();
+        h << "<tr><td><a href='#" << esc(sc.at("experiment").get<std::string>()) << "'>"
+          << esc(sc.at("experiment").get<std::string>()) << "</a></td><td>" << sc.at("frames").get<long>()
+          << "</td><td>" << object << "</td><td>" << cell(m.at("should_detect"), 0) << "</td><td>"
+          << cell(m.at("proposal_recall")) << "</td><td>" << cell(m.at("proposals_per_frame"), 1) << "</td><td>"
+          << cell(m.at("detection_rate")) << "</td><td>" << cell(m.at("false_positives_per_frame"))
+          << "</td><td>" << esc(unmet.empty() ? "none" : unmet) << "</td></tr>";
+      }
+    }
+    h << "</table>";
+  }
+  h << "<h2 id=sweeps>Sweeps: where each detector falls below its target</h2>";
   for (const auto& sw : s.at("sweeps")) {
     h << sweepChart(sw) << "<ul>";
     for (const auto& sr : kSweptRates) {

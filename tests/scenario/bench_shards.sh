@@ -17,7 +17,10 @@ done
 "$bin" merge "$out/s0" "$out/s1" "$out/s2" --out "$out/merged" >"$out/merge.log" 2>&1 || fail "merge: $(cat "$out/merge.log")"
 [ -s "$out/merged/report.html" ] || fail "merge wrote no report.html"
 "$compare" "$out/whole/results.json" "$out/merged/results.json" || fail "sharded and unsharded results differ"
-grep -q '"frames": 11' "$out/merged/results.json" || fail "merged results do not count 11 frames"
+grep -q '"frames": 13' "$out/merged/results.json" || fail "merged results do not count 13 frames"
+grep -Eq "^  hard +2 .*field_features.line_detection_rate >= 1.01$" "$out/whole.log" ||
+  fail "the bench's hard-set table does not list the scenario's unmet expectation: $(cat "$out/whole.log")"
+grep -q '"unmet": \[' "$out/merged/results.json" || fail "merged results have no hard-set summary"
 
 "$bin" merge "$out/s0" "$out/s2" --out "$out/partial" >"$out/partial.log" 2>&1
 rc=$?
