@@ -88,7 +88,8 @@ class Integrals {
       std::uint32_t* px = pix.data();
       for (int x = 0; x < last; ++x) {
         px[2 * x] = src[x];
-        px[2 * x + 1] = static_cast<std::uint32_t>(std::abs(src[x + 1] - src[x]) + std::abs(below[x] - src[x]));
+        px[2 * x + 1] =
+            static_cast<std::uint32_t>(std::abs(src[x + 1] - src[x]) + std::abs(below[x] - src[x]));
       }
       for (int x = last; x < w_; ++x) {
         px[2 * x] = src[x];
@@ -276,8 +277,8 @@ RowBoxes rowBoxes(const Integrals& ii, int y, const Scale& sc) {
 // every other position). The same operations on the same values as response(), so the same floats.
 constexpr int kBatch = 32;
 
-void responsesInside(const RowBoxes& g, const int* cols, int n, float texture_gain, float boost, float* resp,
-                     float* line) {
+void responsesInside(const RowBoxes& g, const int* cols, int n, float texture_gain, float boost,
+                     float* resp, float* line) {
   std::uint32_t v[16][kBatch];
   std::uint32_t e[4][kBatch];
   for (int k = 0; k < n; ++k) {
@@ -295,7 +296,8 @@ void responsesInside(const RowBoxes& g, const int* cols, int n, float texture_ga
     std::uint32_t sums[9];
     for (int j = 0; j < 3; ++j) {
       for (int i = 0; i < 3; ++i) {
-        sums[3 * j + i] = v[4 * (j + 1) + i + 1][k] - v[4 * j + i + 1][k] - v[4 * (j + 1) + i][k] + v[4 * j + i][k];
+        sums[3 * j + i] = v[4 * (j + 1) + i + 1][k] - v[4 * j + i + 1][k] - v[4 * (j + 1) + i][k] +
+                          v[4 * j + i][k];
       }
     }
     for (int m = 0; m < 9; ++m) mean[m] = static_cast<float>(sums[m]) / g.area[m];
