@@ -131,6 +131,54 @@ FloatImage smearAlong(const FloatImage& image, double step_x_px, double step_y_p
   return out;
 }
 
+namespace {
+
+// One pass of a normalised Gaussian kernel along x (stride 1) or y (stride width); the edge repeats.
+void gaussianPass(const FloatImage& in, FloatImage& out, const std::vector<float>& kernel, bool along_x) {
+  const int radius = static_cast<int>(kernel.size() / 2);
+  const int n = along_x ? in.width : in.height;
+  for (int y = 0; y < in.height; ++y) {
+    for (int x = 0; x < in.width; ++x) {
+      const int at = along_x ? x : y;
+      float sum = 0;
+      for (int k = -radius; k <= radius; ++k) {
+        const int j = std::clamp(at + k, 0, n - 1);
+        sum += kernel[k + radius] * (along_x ? in.at(j, y) : in.at(x, j));
+      }
+      out.pixels[static_cast<std::size_t>(y) * in.width + x] = sum;
+    }
+  }
+}
+
+}  // namespace
+
+FloatImage applyOptics(const FloatImage& image, const EffectsSpec& effects) {
+  const double sigma = effects.defocus_px, glare = effects.veiling_glare;
+  if (!std::isfinite(sigma) || sigma < 0 || sigma > 20 || !std::isfinite(glare) || glare < 0 || glare > 0.9) {
+    throw Error("camera effects: defocus_px must be in [0, 20] and veiling_glare in [0, 0.9]");
+  }
+  FloatImage out = image;
+  if (image.pixels.empty()) return out;
+  if (sigma > 0) {
+    const int radius = std::max(1, static_cast<int>(std::ceil(3 * sigma)));
+    std::vector<float> kernel(2 * radius + 1);
+    double total = 0;
+    for (int k = -radius; k <= radius; ++k) total += kernel[k + radius] = static_cast<float>(std::exp(-0.5 * k * k / (sigma * sigma)));
+    for (float& v : kernel) v = static_cast<float>(v / total);
+    FloatImage tmp = image;
+    gaussianPass(image, tmp, kernel, true);
+    gaussianPass(tmp, out, kernel, false);
+  }
+  if (glare > 0) {
+    double mean = 0;
+    for (float v : out.pixels) mean += v;
+    mean /= static_cast<double>(out.pixels.size());
+    const float keep = static_cast<float>(1 - glare), lift = static_cast<float>(glare * mean);
+    for (float& v : out.pixels) v = keep * v + lift;
+  }
+  return out;
+}
+
 GrayImage applySensor(const FloatImage& exposure, const EffectsSpec& effects, std::uint64_t seed) {
   if (!std::isfinite(effects.gain) || effects.gain < 0 || !std::isfinite(effects.noise_sigma) ||
       effects.noise_sigma < 0 || !std::isfinite(effects.shot_noise) || effects.shot_noise < 0) {

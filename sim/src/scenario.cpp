@@ -352,6 +352,8 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
     x.readout_s = e.number("readout_ms", 0, 200, x.readout_s * 1e3) / 1e3;
     x.rolling_shutter_bands =
         static_cast<int>(e.integer("rolling_shutter_bands", 1, 240, x.rolling_shutter_bands));
+    x.defocus_px = e.number("defocus_px", 0, 20, x.defocus_px);
+    x.veiling_glare = e.number("veiling_glare", 0, 0.9, x.veiling_glare);
     e.finish();
     if (x.blur_subframes > 1 && x.exposure_s <= 0) {
       e.fail(effects.Mark(), "effects.blur_subframes", "motion blur needs exposure_ms > 0");

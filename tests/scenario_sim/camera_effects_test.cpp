@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "colorfree/perception/error.h"
 
@@ -184,6 +185,40 @@ TEST(CameraEffectsTest, SmearTurnsSubframeCopiesIntoOneContinuousStreak) {
   // Under a pixel nothing changes; a NaN step is an error.
   EXPECT_EQ(smearAlong(comb, 0.6, 0.3).pixels, comb.pixels);
   EXPECT_THROW(smearAlong(comb, std::nan(""), 0.0), Error);
+}
+
+TEST(CameraEffectsTest, DefocusSpreadsAPointAsAGaussianAndGlareFlattensContrast) {
+  // A point of 1000 through a lens of sigma 2 px: the light is kept, spread as exp(-r^2 / 8).
+  FloatImage dot = flat(41, 41, 0.0f);
+  dot.pixels[20 * 41 + 20] = 1000.0f;
+  EffectsSpec e;
+  e.defocus_px = 2.0;
+  const FloatImage b = applyOptics(dot, e);
+  double total = 0;
+  for (float v : b.pixels) total += v;
+  EXPECT_NEAR(total, 1000.0, 1e-2);
+  const double peak = 1000.0 / (2 * std::numbers::pi * 4);
+  EXPECT_NEAR(b.at(20, 20), peak, 0.02 * peak);
+  EXPECT_NEAR(b.at(22, 20), peak * std::exp(-0.5), 0.02 * peak);  // one sigma in x ...
+  EXPECT_NEAR(b.at(20, 24), peak * std::exp(-2.0), 0.02 * peak);  // ... two in y
+  EXPECT_NEAR(b.at(22, 22), peak * std::exp(-1.0), 0.02 * peak);  // separable
+  EXPECT_EQ(b.at(20, 29), 0.0f);  // beyond the kernel's 3 sigma nothing
+  // Glare: black lifts and white drops toward the mean, which stays; contrast x (1 - g).
+  FloatImage step = flat(10, 2, 0.0f);
+  for (int x = 5; x < 10; ++x) step.pixels[x] = step.pixels[10 + x] = 200.0f;
+  EffectsSpec g;
+  g.veiling_glare = 0.25;
+  const FloatImage f = applyOptics(step, g);
+  EXPECT_FLOAT_EQ(f.at(0, 0), 25.0f);
+  EXPECT_FLOAT_EQ(f.at(9, 1), 175.0f);
+  // Neither: the image unchanged; out of range or not finite: an error.
+  EXPECT_EQ(applyOptics(step, EffectsSpec{}).pixels, step.pixels);
+  e.defocus_px = -1;
+  EXPECT_THROW(applyOptics(step, e), Error);
+  e.defocus_px = std::nan("");
+  EXPECT_THROW(applyOptics(step, e), Error);
+  g.veiling_glare = 0.95;
+  EXPECT_THROW(applyOptics(step, g), Error);
 }
 
 TEST(CameraEffectsTest, ComposeRejectsMismatchedSubframes) {

@@ -213,6 +213,10 @@ TEST(ScenarioTest, ValueOutOfRangeNamesFileLineAndKey) {
       << preset;
   const std::string nan = errorOf(std::string(kMinimal) + "effects: {gain: .nan}\n");
   EXPECT_NE(nan.find("effects.gain"), std::string::npos) << nan;
+  const std::string glare = errorOf(std::string(kMinimal) + "effects: {defocus_px: 1.5, veiling_glare: 1.2}\n");
+  EXPECT_NE(glare.find("effects.veiling_glare: value 1.2 is out of range"), std::string::npos) << glare;
+  const std::string defocus = errorOf(std::string(kMinimal) + "effects: {defocus_px: -1}\n");
+  EXPECT_NE(defocus.find("effects.defocus_px: value -1 is out of range"), std::string::npos) << defocus;
   const std::string head =
       errorOf(std::string(kMinimal).replace(std::string(kMinimal).find("  heading_deg: 90\n"), 17,
                                             "  heading_deg: 90\n  head: {pitch_deg: 40}\n"));

@@ -57,6 +57,14 @@ FloatImage composeSubframes(const std::vector<GrayImage>& subframes, const Expos
 /// pixels beyond the image repeat the edge. Throws colorfree::Error for a non-finite step.
 FloatImage smearAlong(const FloatImage& image, double step_x_px, double step_y_px);
 
+/// The lens, before the sensor: a Gaussian point spread of σ = `defocus_px` (separable, pixels
+/// beyond the image repeat the edge; 0 leaves the image as it is), then veiling glare, the share
+/// `veiling_glare` of the light scattered evenly over the frame: value × (1 − g) + g × the frame's
+/// mean. Both keep the frame's mean light (up to the edge repeat); glare lifts the blacks and
+/// flattens contrast as a real lens in a dim hall does. Throws colorfree::Error for a value out of
+/// range (σ not in [0, 20], g not in [0, 0.9], or not finite).
+FloatImage applyOptics(const FloatImage& image, const EffectsSpec& effects);
+
 /// Exposure/gain and sensor noise: value × gain, plus Gaussian noise of variance
 /// noise_sigma² + shot_noise × value, rounded and clipped to 0..255. `seed` fixes the noise.
 GrayImage applySensor(const FloatImage& exposure, const EffectsSpec& effects, std::uint64_t seed);

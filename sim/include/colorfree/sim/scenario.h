@@ -71,6 +71,8 @@ struct EffectsSpec {
   bool rolling_shutter = false;   ///< NAO V6: rows exposed one after the other
   double readout_s = 0.03;        ///< rolling shutter: time from the first to the last row
   int rolling_shutter_bands = 8;  ///< rolling shutter: renders across the readout at least
+  double defocus_px = 0;          ///< lens blur: σ of a Gaussian point spread, pixels; 0 = sharp
+  double veiling_glare = 0;       ///< share of the light the lens scatters evenly over the frame
 };
 
 /// One expectation, e.g. "ball.detection_rate >= 0.97". The metric names are checked by the
