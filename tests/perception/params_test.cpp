@@ -127,6 +127,17 @@ TEST(CameraFile, DocumentedExampleLoadsAndSeesTheGroundAhead) {
   EXPECT_LT(*cam.horizonY(320), 240);
 }
 
+TEST(CameraFile, DocumentedBottomExampleLoadsAndSeesTheGroundInFrontOfTheFeet) {
+  const CameraModel cam = CameraModel::load(std::string(COLORFREE_SOURCE_DIR) + "/docs/camera_nao_bottom_example.yaml");
+  // The image centre looks at the ground 0.3 to 0.5 m ahead; the whole image is below the horizon.
+  const auto centre = cam.pixelToGround({320, 240});
+  ASSERT_TRUE(centre);
+  EXPECT_GT(centre->x(), 0.3);
+  EXPECT_LT(centre->x(), 0.5);
+  EXPECT_TRUE(cam.pixelToGround({320, 0.5}));
+  EXPECT_TRUE(cam.pixelToGround({0.5, 0.5}));
+}
+
 TEST(StageParams, PipelineConfigLoadsTheShippedDirectory) {
   const PipelineConfig c = PipelineConfig::loadDefault();
   EXPECT_EQ(c.field_lines, FieldLineParams{});
