@@ -41,7 +41,7 @@ struct RobotOrientationParams {
   /// An edge is the feet's only when the mean gray just above it is at least this many times the
   /// carpet's (the median gray of the feet region's outer columns): the feet are brighter than the
   /// carpet, a cast shadow's upper edge has only the carpet above it (0: no such test).
-  double silhouette_min_above_carpet_ratio = 1.0;
+  double silhouette_min_above_carpet_ratio = 1.15;
   int silhouette_above_rows_px = 3;  ///< px above an edge whose mean gray is its "above" value
   double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
   double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
