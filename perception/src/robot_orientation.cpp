@@ -212,19 +212,25 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   };
   std::vector<Hit> hits;
   std::vector<int> first_hit;  // per scan line, its first entry in `hits`
-  // The carpet's gray: the median over the feet region's outer columns (the box is wider than the
-  // feet). An edge with no more than the carpet above it is a cast shadow's upper edge or the
-  // carpet's texture, not the feet (white, or lit gray, above the carpet or the feet's dark panels).
+  // The carpet's gray: the median over the columns just beside the feet region on both sides
+  // (outside the robot's box, however tight the box; inside its outer columns where the image
+  // ends there). An edge with no more than the carpet above it is a cast shadow's upper edge or
+  // the carpet's texture, not the feet (white, or lit gray, above the carpet or the dark panels).
   double min_above_gray = 0;
   if (p.silhouette_min_above_carpet_ratio > 0) {
     std::vector<std::uint8_t> outer;
     const int strip = std::max(2, cns.width / 16);
+    std::vector<int> columns_beside;
+    for (int i = 1; i <= strip; ++i) {
+      const int left = cns.x0 - i >= 0 ? cns.x0 - i : cns.x0 + i - 1;
+      const int right = cns.x0 + cns.width - 1 + i < image.width ? cns.x0 + cns.width - 1 + i
+                                                                   : cns.x0 + cns.width - i;
+      columns_beside.push_back(left);
+      columns_beside.push_back(right);
+    }
     for (int y = cns.y0; y < cns.y0 + cns.height; ++y) {
       const std::uint8_t* row = image.row(y);
-      for (int i = 0; i < strip; ++i) {
-        outer.push_back(row[cns.x0 + i]);
-        outer.push_back(row[cns.x0 + cns.width - 1 - i]);
-      }
+      for (int x : columns_beside) outer.push_back(row[x]);
     }
     std::nth_element(outer.begin(), outer.begin() + outer.size() / 2, outer.end());
     min_above_gray = p.silhouette_min_above_carpet_ratio * outer[outer.size() / 2];
