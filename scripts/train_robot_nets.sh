@@ -11,7 +11,8 @@ DATA=${2:-/tmp/colorfree_robot_datasets}
 MODELS=${3:-perception/models}
 CF="$BUILD/bin/colorfree"
 S=scenes/train
-ORI_TRAIN="$S/robot_orientation_train.yaml $S/robot_orientation_walk_train.yaml $S/robot_orientation_near_train.yaml"
+ORI_TRAIN="$S/robot_orientation_train.yaml $S/robot_orientation_walk_train.yaml $S/robot_orientation_near_train.yaml
+  $S/robot_orientation_turn2_train.yaml $S/robot_orientation_walk2_train.yaml"
 COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --models $MODELS --quiet"
 # shellcheck disable=SC2086
 "$CF" learn ori_boost --train $ORI_TRAIN \
@@ -22,10 +23,11 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
   --dataset "$DATA/ori"
 # OriNet's four classes (front, back, the side facing left or right) need longer training than
 # the loop's 40 epochs, and the 43 held-out regions are too few to stop on: the final weights
-# are trained on the loop's samples for up to 120 epochs, stopped on a seeded 15 % split of them
-# (40 epochs: 0.87 on that split, 120: 0.91). The side classes must not be mirrored.
+# are trained on the loop's samples for up to 200 epochs, stopped on a seeded 15 % split of them
+# after 40 epochs without gain (970 samples: patience 20 stopped at epoch 52 with 0.87 on that
+# split, patience 40 at epoch 135 with 0.97). The side classes must not be mirrored.
 "$CF" train --cfg "$MODELS/ori_net.cfg" --data "$DATA/ori/ori_net" --out "$MODELS/ori_net.weights" \
-  --classes front,back,side_left,side_right --no-flip side_left side_right --epochs 120 --patience 20 \
+  --classes front,back,side_left,side_right --no-flip side_left side_right --epochs 200 --patience 40 \
   --seed 1 --quiet
 # shellcheck disable=SC2086
 "$CF" learn robot --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \

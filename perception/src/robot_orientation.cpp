@@ -25,6 +25,8 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.silhouette_neighbour_rows_px = static_cast<int>(f.getInRange("silhouette_neighbour_rows_px", 0, 64));
   p.silhouette_min_chain_px = static_cast<int>(f.getInRange("silhouette_min_chain_px", 1, 640));
   p.silhouette_min_chain_fraction = f.getInRange("silhouette_min_chain_fraction", 0, 1);
+  p.silhouette_min_above_carpet_ratio = f.getInRange("silhouette_min_above_carpet_ratio", 0, 4);
+  p.silhouette_above_rows_px = static_cast<int>(f.getInRange("silhouette_above_rows_px", 1, 16));
   p.vote_distance_m = f.getInRange("vote_distance_m", 0.0001, 1);
   p.vote_margin_m = f.getInRange("vote_margin_m", 0, 2);
   p.second_line_min_length_m = f.getInRange("second_line_min_length_m", 0, 2);
@@ -210,6 +212,35 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   };
   std::vector<Hit> hits;
   std::vector<int> first_hit;  // per scan line, its first entry in `hits`
+  // The carpet's gray: the median over the columns just beside the feet region on both sides
+  // (outside the robot's box, however tight the box; inside its outer columns where the image
+  // ends there). An edge with no more than the carpet above it is a cast shadow's upper edge or
+  // the carpet's texture, not the feet (white, or lit gray, above the carpet or the dark panels).
+  double min_above_gray = 0;
+  if (p.silhouette_min_above_carpet_ratio > 0) {
+    std::vector<std::uint8_t> outer;
+    const int strip = std::max(2, cns.width / 16);
+    std::vector<int> columns_beside;
+    for (int i = 1; i <= strip; ++i) {
+      const int left = cns.x0 - i >= 0 ? cns.x0 - i : cns.x0 + i - 1;
+      const int right = cns.x0 + cns.width - 1 + i < image.width ? cns.x0 + cns.width - 1 + i
+                                                                   : cns.x0 + cns.width - i;
+      columns_beside.push_back(left);
+      columns_beside.push_back(right);
+    }
+    for (int y = cns.y0; y < cns.y0 + cns.height; ++y) {
+      const std::uint8_t* row = image.row(y);
+      for (int x : columns_beside) outer.push_back(row[x]);
+    }
+    std::nth_element(outer.begin(), outer.begin() + outer.size() / 2, outer.end());
+    min_above_gray = p.silhouette_min_above_carpet_ratio * outer[outer.size() / 2];
+  }
+  // The mean gray of the rows just above an edge whose upper row is y_edge.
+  auto aboveGray = [&](int x, int y_edge) {
+    int sum = 0, n = 0;
+    for (int y = y_edge - 1; y >= y_edge - p.silhouette_above_rows_px && y >= 0; --y, ++n) sum += image.row(y)[x];
+    return n > 0 ? static_cast<double>(sum) / n : 0.0;
+  };
   int columns = 0;
   for (int x = cns.x0 + half; x < cns.x0 + cns.width - half; x += p.scan_step_px, ++columns) {
     first_hit.push_back(static_cast<int>(hits.size()));
@@ -228,7 +259,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
         median = window[n / 2];
       }
       run = median > threshold ? run + 1 : 0;
-      if (run == p.silhouette_min_rows) {
+      if (run == p.silhouette_min_rows && (min_above_gray <= 0 || aboveGray(x, y) >= min_above_gray)) {
         hits.push_back({columns, y + p.silhouette_min_rows - 1});
         ++found;
       }

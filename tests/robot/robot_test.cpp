@@ -177,17 +177,19 @@ TEST(Cns, MatchesTheDefinitionInsideAndAtTheImageBorder) {
   }
 }
 
-RobotOrientationEstimator untrainedEstimator() {
+RobotOrientationEstimator untrainedEstimator(
+    const RobotOrientationParams& params = RobotOrientationParams::loadDefault()) {
   auto net = [](int i) {
     cnn::Net n = cnn::readDarknetCfg(cnn::kShippedNets[i].cfgPath());
     n.initialise(3);
     return cnn::Classifier(std::move(n));
   };
-  return RobotOrientationEstimator(RobotOrientationParams::loadDefault(),
-                                   FieldDimensions::loadDefault(), net(3), net(4));
+  return RobotOrientationEstimator(params, FieldDimensions::loadDefault(), net(3), net(4));
 }
 
-void checkFootBlockLine(double yaw_deg) {
+// `shadow_ratio` >= 0: the block casts a dark shadow on the carpet towards the camera and its
+// left (directional light), and the lines generator runs with that above-the-carpet ratio.
+void checkFootBlockLine(double yaw_deg, double shadow_ratio = -1) {
   const CameraModel cam = testCamera();
   {
     GrayImage img = carpet(5);
@@ -206,6 +208,21 @@ void checkFootBlockLine(double yaw_deg) {
     std::vector<cv::Point> hull;
     cv::convexHull(pts, hull);
     cv::Mat m = wrap(img);
+    if (shadow_ratio >= 0) {
+      // The shadow: the block's footprint swept along the light on the ground, towards the camera
+      // and the left (darker than the carpet); left of the block its upper edge has the carpet
+      // above it, a bright-above-dark edge as strong as the block's.
+      std::vector<cv::Point> shadow_pts, shadow;
+      for (double a : {-0.08, 0.08})
+        for (double b : {-0.10, 0.10})
+          for (double s : {0.0, 1.0}) {
+            const Eigen::Vector2d g = centre + a * u + b * v + s * Eigen::Vector2d(-0.05, 0.12);
+            const auto p = cam.robotToPixel({g.x(), g.y(), 0});
+            shadow_pts.emplace_back(int(std::lround(p->x())), int(std::lround(p->y())));
+          }
+      cv::convexHull(shadow_pts, shadow);
+      cv::fillConvexPoly(m, shadow, cv::Scalar(20));
+    }
     cv::fillConvexPoly(m, hull, cv::Scalar(200));
     RobotPercept robot;
     // As the proposer gives it: the lowest point of the silhouette.
@@ -216,7 +233,19 @@ void checkFootBlockLine(double yaw_deg) {
     robot.box = {robot.feet_px.x() - 0.4 * h, robot.feet_px.y() - h, robot.feet_px.x() + 0.4 * h,
                  robot.feet_px.y() + 0.05 * h};
     robot.position_in_robot = centre;
-    const RobotLines lines = untrainedEstimator().findLines(img.view(), cam, robot);
+    RobotOrientationParams params = RobotOrientationParams::loadDefault();
+    if (shadow_ratio >= 0) params.silhouette_min_above_carpet_ratio = shadow_ratio;
+    const RobotLines lines = untrainedEstimator(params).findLines(img.view(), cam, robot);
+    int left = 640, right = 0;
+    for (const auto& q : hull) left = std::min(left, q.x), right = std::max(right, q.x);
+    auto offBlock = [&](const Eigen::Vector2d& q) { return q.x() < left - 3 || q.x() > right + 3 || q.y() > lowest + 3; };
+    if (shadow_ratio == 0) {
+      // Without the test, the shadow's edge left of the block is the lowest long chain there.
+      EXPECT_TRUE(std::any_of(lines.silhouette_px.begin(), lines.silhouette_px.end(), offBlock)) << yaw_deg;
+      return;
+    }
+    // Every silhouette point lies on the block, none on the shadow beside and below it.
+    for (const auto& q : lines.silhouette_px) EXPECT_FALSE(offBlock(q)) << yaw_deg << " " << q.transpose();
     ASSERT_FALSE(lines.regions.empty()) << yaw_deg;
     const Eigen::Vector2d d = lines.regions[0].line_in_robot.direction();
     // The lower silhouette is the block's near edges: the first line lies along one of them.
@@ -231,6 +260,18 @@ TEST(LinesGenerator, FindsTheFrontEdgeOfADrawnFootBlock) { checkFootBlockLine(0.
 // (no edge of the block) and noise points below the edges must not win.
 TEST(LinesGenerator, FindsAnEdgeOfATurnedFootBlock) {
   for (double yaw : {30.0, -50.0, 15.0, 70.0, -35.0}) checkFootBlockLine(yaw);
+}
+
+// Directional light: the block's cast shadow below it has the carpet above its near edge. The
+// silhouette keeps only edges with more than the carpet above them: the block's, not the shadow's
+// (which, without that test, would be the lowest chain and so the silhouette).
+TEST(LinesGenerator, IgnoresTheCastShadowBelowAFootBlock) {
+  const double ratio = RobotOrientationParams::loadDefault().silhouette_min_above_carpet_ratio;
+  ASSERT_GT(ratio, 0);
+  for (double yaw : {0.0, 30.0, -50.0}) {
+    checkFootBlockLine(yaw, ratio);
+    checkFootBlockLine(yaw, 0.0);
+  }
 }
 
 TEST(RobotTracks, AssociatesOverFramesAndExpires) {

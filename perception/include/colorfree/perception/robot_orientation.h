@@ -38,6 +38,11 @@ struct RobotOrientationParams {
   int silhouette_neighbour_rows_px = 2;      ///< edge points on neighbouring scan lines this close chain
   int silhouette_min_chain_px = 4;           ///< a silhouette point's chain spans at least this many scan lines ...
   double silhouette_min_chain_fraction = 0.12;  ///< ... and this fraction of the robot box's width
+  /// An edge is the feet's only when the mean gray just above it is at least this many times the
+  /// carpet's (the median gray of the feet region's outer columns): the feet are brighter than the
+  /// carpet, a cast shadow's upper edge has only the carpet above it (0: no such test).
+  double silhouette_min_above_carpet_ratio = 1.15;
+  int silhouette_above_rows_px = 3;  ///< px above an edge whose mean gray is its "above" value
   double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
   double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
   double second_line_min_length_m = 0.04;
