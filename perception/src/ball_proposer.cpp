@@ -24,6 +24,9 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.outer_fraction = f.getInRange("outer_fraction", 0.2, 4);
   p.print_weight = f.getInRange("print_weight", 0, 10);
   p.min_response = f.getInRange("min_response", -255, 255);
+  p.light_response_fraction = f.getInRange("light_response_fraction", 0, 10);
+  p.light_contrast_fraction = f.getInRange("light_contrast_fraction", 0, 10);
+  p.light_max_window_contrast = f.getInRange("light_max_window_contrast", 0, 255);
   p.per_window_count = static_cast<int>(f.getInRange("per_window_count", 1, 16));
   p.nms_fraction = f.getInRange("nms_fraction", 0, 10);
   p.max_count = static_cast<int>(f.getInRange("max_count", 1, 1000));
@@ -387,6 +390,64 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
   return {x + (bi - half) * cell, y + (bj - half) * cell};
 }
 
+// The median grey level of the looked-at pixels (every 4th pixel of every 4th row); of the whole
+// image when nothing is looked at.
+double frameLight(const GrayView& image, const IgnoreMask& ignore) {
+  std::uint32_t hist[256] = {};
+  std::uint32_t n = 0;
+  for (int pass = 0; pass < 2 && n == 0; ++pass) {
+    for (int y = 2; y < image.height; y += 4) {
+      const std::uint8_t* row = image.row(y);
+      for (int x = 2; x < image.width; x += 4) {
+        if (pass == 0 && !ignore.looked(x, y)) continue;
+        ++hist[row[x]];
+        ++n;
+      }
+    }
+  }
+  std::uint32_t acc = 0;
+  for (int g = 0; g < 256; ++g) {
+    acc += hist[g];
+    if (2 * acc >= n) return g;
+  }
+  return 255;
+}
+
+// Windows (of the high-contrast grid) whose grey-level standard deviation over every 2nd row is at
+// least `min_std`, looked at (centre pixel), grown by one window: row-major, 1 where marked.
+std::vector<std::uint8_t> dimWindows(const GrayView& image, const IgnoreMask& ignore,
+                                     const ContrastRegions& regions, double min_std) {
+  const int s = regions.window_px, cols = regions.columns, rows = regions.rows;
+  std::vector<std::uint8_t> seeds(static_cast<std::size_t>(cols) * rows, 0);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      if (!ignore.looked(c * s + s / 2, r * s + s / 2)) continue;
+      std::uint32_t sum = 0, sum2 = 0, n = 0;
+      for (int y = r * s; y < (r + 1) * s; y += 2) {
+        const std::uint8_t* row = image.row(y) + c * s;
+        for (int x = 0; x < s; ++x) {
+          sum += row[x];
+          sum2 += static_cast<std::uint32_t>(row[x]) * row[x];
+        }
+        n += static_cast<std::uint32_t>(s);
+      }
+      const double mean = double(sum) / n;
+      const double var = double(sum2) / n - mean * mean;
+      if (var >= min_std * min_std) seeds[static_cast<std::size_t>(r) * cols + c] = 1;
+    }
+  }
+  std::vector<std::uint8_t> out(seeds.size(), 0);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      if (!seeds[static_cast<std::size_t>(r) * cols + c]) continue;
+      for (int j = std::max(0, r - 1); j <= std::min(rows - 1, r + 1); ++j) {
+        for (int i = std::max(0, c - 1); i <= std::min(cols - 1, c + 1); ++i) out[static_cast<std::size_t>(j) * cols + i] = 1;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraModel& camera,
@@ -402,11 +463,23 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       regions.mask.size() != static_cast<std::size_t>(regions.columns) * regions.rows) {
     throw Error("ball proposals: high-contrast windows do not match the image size");
   }
+  // Thresholds that follow the frame's light (the absolute ones hold in a bright frame).
+  double min_response = p.min_response;
+  std::vector<std::uint8_t> dim;
+  if (p.light_response_fraction > 0 || p.light_contrast_fraction > 0) {
+    const double light = frameLight(image, ignore);
+    if (p.light_response_fraction > 0) min_response = std::min(min_response, p.light_response_fraction * light);
+    const double min_std = p.light_contrast_fraction * light;
+    if (p.light_contrast_fraction > 0 && min_std < p.light_max_window_contrast) {
+      dim = dimWindows(image, ignore, regions, min_std);
+    }
+  }
   std::vector<ScanRect> rects;
   const int s = regions.window_px;
   for (int r = 0; r < regions.rows; ++r) {
     for (int c = 0; c < regions.columns; ++c) {
-      if (regions.marked(c, r)) rects.push_back({c * s, r * s, (c + 1) * s, (r + 1) * s, 1.0});
+      const bool extra = !dim.empty() && dim[static_cast<std::size_t>(r) * regions.columns + c];
+      if (regions.marked(c, r) || extra) rects.push_back({c * s, r * s, (c + 1) * s, (r + 1) * s, 1.0});
     }
   }
   if (robots != nullptr) {
@@ -488,7 +561,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }
-        if (resp < p.min_response) return;
+        if (resp < min_response) return;
         const Candidate cand{x + 0.5f, yy + 0.5f, static_cast<float>(r), resp};
         if (static_cast<int>(best.size()) < keep) {
           best.push_back(cand);

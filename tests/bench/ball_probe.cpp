@@ -45,6 +45,8 @@ int probe(int argc, char** argv) {
   env("BP_MINGRAD", config.ball_proposer.min_gradient);
   env("BP_RTOL", config.ball_proposer.radius_tolerance);
   env("BP_MINRESP", config.ball_proposer.min_response);
+  env("BP_LRESP", config.ball_proposer.light_response_fraction);
+  env("BP_LCONT", config.ball_proposer.light_contrast_fraction);
   env("BP_INNER", config.ball_proposer.inner_fraction);
   env("BP_OUTER", config.ball_proposer.outer_fraction);
   env("BP_TEXEXP", config.ball_proposer.texture_scale_exponent);

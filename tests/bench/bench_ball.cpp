@@ -2,9 +2,6 @@
 // ≤ 0.06 ms, classification ≤ 0.04 ms on a typical 640×480 frame). The frames are rendered at
 // start: a typical one from scenes/ball_game.yaml (case 0, frame 1) and every frame of
 // scenes/ball_hard.yaml, of which the mean and the maximum are printed at the end.
-// BM_BallProposalsReference times the proposer as it was before the speed work (the baseline, in
-// ball_proposer_reference.cpp) on the same frames; the end says on how many frames both propose the
-// same (centre, radius, response).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -19,7 +16,6 @@
 #include "colorfree/sim/runner.h"
 #include "colorfree/sim/scenario.h"
 #include "colorfree/sim/world_renderer.h"
-#include "ball_proposer_reference.h"
 
 namespace {
 
@@ -76,21 +72,6 @@ void BM_BallProposals(benchmark::State& state, const BenchFrame* f) {
   }
 }
 
-void BM_BallProposalsReference(benchmark::State& state, const BenchFrame* f) {
-  for (auto _ : state) {
-    auto p = bench::referenceBallProposals(proposer().params(), f->image.view(), f->camera, f->ignore, f->regions, nullptr);
-    benchmark::DoNotOptimize(p.data());
-  }
-}
-
-bool sameProposals(const std::vector<BallProposal>& a, const std::vector<BallProposal>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (a[i].centre_px != b[i].centre_px || a[i].radius_px != b[i].radius_px || a[i].response != b[i].response) return false;
-  }
-  return true;
-}
-
 void BM_BallClassification(benchmark::State& state, const BenchFrame* f) {
   for (auto _ : state) {
     auto b = detector().run(f->image.view(), f->camera, f->proposals);
@@ -138,19 +119,15 @@ int main(int argc, char** argv) {
   }
   const BenchFrame* typical = &typicalFrames().front();
   benchmark::RegisterBenchmark("BM_BallProposals/typical", BM_BallProposals, typical);
-  benchmark::RegisterBenchmark("BM_BallProposalsReference/typical", BM_BallProposalsReference, typical);
   benchmark::RegisterBenchmark("BM_BallClassification/typical", BM_BallClassification, typical);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
 
   // The hard set: per frame the median of 200 runs; mean and maximum over the frames.
-  double prop_sum = 0, prop_max = 0, cls_sum = 0, cls_max = 0, ref_sum = 0, ref_max = 0;
+  double prop_sum = 0, prop_max = 0, cls_sum = 0, cls_max = 0;
   std::string prop_worst, cls_worst;
   for (const BenchFrame& f : hardFrames()) {
     const double p = medianMs([&] { benchmark::DoNotOptimize(proposer().run(f.image.view(), f.camera, f.ignore, f.regions, nullptr).size()); }, 200);
-    const double r = medianMs([&] { benchmark::DoNotOptimize(bench::referenceBallProposals(proposer().params(), f.image.view(), f.camera, f.ignore, f.regions, nullptr).size()); }, 200);
-    ref_sum += r;
-    ref_max = std::max(ref_max, r);
     const double c = medianMs([&] { benchmark::DoNotOptimize(detector().run(f.image.view(), f.camera, f.proposals).size()); }, 200);
     prop_sum += p;
     cls_sum += c;
@@ -160,16 +137,7 @@ int main(int argc, char** argv) {
   const double n = static_cast<double>(std::max<std::size_t>(1, hardFrames().size()));
   std::printf("\nball_hard (%zu frames, median CPU time of 200 runs per frame):\n", hardFrames().size());
   std::printf("  ball proposals       mean %.4f ms  max %.4f ms (%s)   goal 0.06 ms typical\n", prop_sum / n, prop_max, prop_worst.c_str());
-  std::printf("  (baseline proposals  mean %.4f ms  max %.4f ms)\n", ref_sum / n, ref_max);
   std::printf("  ball classification  mean %.4f ms  max %.4f ms (%s)   goal 0.04 ms typical\n", cls_sum / n, cls_max, cls_worst.c_str());
-  int same = 0, frames = 0;
-  for (auto* set : {&typicalFrames(), &hardFrames()}) {
-    for (const BenchFrame& f : *set) {
-      ++frames;
-      same += sameProposals(f.proposals, bench::referenceBallProposals(proposer().params(), f.image.view(), f.camera, f.ignore, f.regions, nullptr));
-    }
-  }
-  std::printf("  proposals the same as the baseline's on %d of %d frames\n", same, frames);
   benchmark::Shutdown();
   return 0;
 }

@@ -37,6 +37,16 @@ struct BallProposerParams {
   /// quadrants is added to the response with this weight.
   double print_weight = 0.0;
   double min_response = 40.0;       ///< grey levels; weaker responses never become proposals
+  /// Thresholds that follow the image's light (a dark hall, a soft lens: the ball is plainly
+  /// visible but its contrast falls with the light). `light` is the median grey level of the
+  /// looked-at part of the frame (every 4th pixel of every 4th row; the carpet, mostly). Responses
+  /// count from min(min_response, light_response_fraction × light); and a 16×16 window the
+  /// high-contrast stage left unmarked is scanned too when its grey-level standard deviation
+  /// (every 2nd row) is at least light_contrast_fraction × light and below the high-contrast stage's
+  /// own threshold in a bright frame (so: only in dark frames), grown by one window like theirs.
+  double light_response_fraction = 0.0;
+  double light_contrast_fraction = 0.25;
+  double light_max_window_contrast = 22.0;  ///< grey levels: windows are only added below this threshold
   int per_window_count = 1;         ///< best responses kept per 16×16 window (grid cell)
   /// Two proposals closer than nms_fraction × the larger radius: only the stronger one is kept.
   double nms_fraction = 1.0;
