@@ -15,7 +15,9 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.min_jump_gray = f.getInRange("min_jump_gray", 1, 255);
   p.jump_ratio = f.getInRange("jump_ratio", 0, 1);
   p.carpet_update_weight = f.getInRange("carpet_update_weight", 0, 1);
+  p.carpet_dark_decay = f.getInRange("carpet_dark_decay", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
+  p.max_gap_height_fraction = f.getInRange("max_gap_height_fraction", 0, 1);
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
   p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
@@ -26,6 +28,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.box_width_factor = f.getInRange("box_width_factor", 0.1, 10);
   p.box_height_factor = f.getInRange("box_height_factor", 0.1, 10);
   p.box_below_feet_fraction = f.getInRange("box_below_feet_fraction", 0, 1);
+  p.own_body_height_fraction = f.getInRange("own_body_height_fraction", 0.1, 1);
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
   p.max_proposals = static_cast<int>(f.getInRange("max_proposals", 0, 1000));
   f.finish();
@@ -110,13 +113,18 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         r = r_top - 1;
         if (y_hi - y_lo < 2) continue;
         double carpet = image.at(x, y_hi);
+        // The reference the robot must be brighter than: the running carpet luminance, but after
+        // a darker stretch (a shadow, the ball's black patches) it falls back to it only by
+        // carpet_dark_decay per row, so the carpet after a short dark stretch is no robot.
+        double ref = carpet;
         int y = y_hi;
         while (y >= y_lo) {
           const double v = image.at(x, y);
-          const double thr = std::max(p.min_jump_gray, p.jump_ratio * carpet);
+          const double thr = std::max(p.min_jump_gray, p.jump_ratio * ref);
           // Shadows are darker than the carpet, the robots' feet and legs brighter.
-          if (v - carpet <= thr) {
+          if (v - ref <= thr) {
             carpet += p.carpet_update_weight * (v - carpet);
+            ref = std::max(carpet, ref * (1 - p.carpet_dark_decay));
             --y;
             continue;
           }
@@ -129,17 +137,20 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           }
           const int needed = static_cast<int>(std::ceil(p.min_run_height_fraction * *expected));
           // Above the feet, most pixels up to the needed height must differ from the carpet
-          // (a robot's legs, with gaps at the joints); the contiguous part decides where the
-          // scan goes on when the run is rejected.
+          // (a robot's legs, with gaps at the joints). Only the run that starts at the feet
+          // counts: a gap of carpet longer than a joint ends it, so a field line below a robot
+          // does not borrow the robot's pixels above the carpet between them.
+          const int max_gap =
+              std::max(p.max_gap_px, static_cast<int>(p.max_gap_height_fraction * *expected));
           int run_top = y, gap = 0, filled = 0;
-          bool contiguous = true;
           for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
-            if (image.at(x, yy) - carpet > thr) {
+            const double d = image.at(x, yy);
+            if (d - ref > thr || carpet - d > thr) {
               ++filled;
-              if (contiguous) run_top = yy;
+              run_top = yy;
               gap = 0;
-            } else if (++gap > p.max_gap_px) {
-              contiguous = false;
+            } else if (++gap > max_gap) {
+              break;
             }
           }
           if (*expected < p.min_expected_height_px) {
@@ -233,10 +244,13 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   for (const Candidate& c : candidates) {
     bool overlaps = false;
     for (const RobotProposal& kept : out.proposals) {
-      // A feet point inside a nearer robot's box is that robot's knee, hip or arm.
+      // A feet point inside the lower part of a nearer robot's box is that robot's knee, hip
+      // or hand; higher up it is a farther robot's (a robot's own body makes none there).
       const Eigen::Vector2d& f = c.proposal.feet_px;
-      const bool inside = f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() > kept.box.y0 &&
-                          f.y() < kept.feet_px.y() - 0.1 * kept.box.height();
+      const double kept_h = kept.box.height();
+      const bool inside = f.x() > kept.box.x0 && f.x() < kept.box.x1 &&
+                          f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h &&
+                          f.y() < kept.feet_px.y() - 0.1 * kept_h;
       if (inside || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
         overlaps = true;
         break;
