@@ -18,6 +18,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.carpet_dark_decay = f.getInRange("carpet_dark_decay", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
   p.max_gap_height_fraction = f.getInRange("max_gap_height_fraction", 0, 1);
+  p.feet_dark_height_fraction = f.getInRange("feet_dark_height_fraction", 0, 1);
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
   p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
@@ -117,18 +118,25 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         // a darker stretch (a shadow, the ball's black patches) it falls back to it only by
         // carpet_dark_decay per row, so the carpet after a short dark stretch is no robot.
         double ref = carpet;
+        // The stretch of pixels darker than the reference the scan passed last (rows, bottom
+        // and top; -1: none): the feet's dark side panels, or the contact shadow under them.
+        int dark_bottom = -1, dark_top = -1;
         int y = y_hi;
         while (y >= y_lo) {
           const double v = image.at(x, y);
           const double thr = std::max(p.min_jump_gray, p.jump_ratio * ref);
           // Shadows are darker than the carpet, the robots' feet and legs brighter.
           if (v - ref <= thr) {
+            if (ref - v > thr) {
+              if (dark_top < 0 || dark_top - y > p.max_gap_px + 1) dark_bottom = y;
+              dark_top = y;
+            }
             carpet += p.carpet_update_weight * (v - carpet);
             ref = std::max(carpet, ref * (1 - p.carpet_dark_decay));
             --y;
             continue;
           }
-          const int feet_y = y + 1;
+          int feet_y = y + 1;
           const Eigen::Vector2d feet_px(x + 0.5, feet_y);
           const auto expected = camera.robotHeightPx(feet_px, robot_height_m_);
           if (!expected) {
@@ -156,8 +164,16 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
           } else if (filled >= p.min_fill_fraction * needed) {
+            // A dark stretch just below the bright feet (a joint's gap away at most) and no
+            // taller than a foot is the feet's dark lower part or their contact shadow: the
+            // robot stands at its bottom. (The darker reference after it hides those rows from
+            // the brightness test; the orientation stage's feet region hangs from this row.)
+            if (dark_top >= 0 && dark_top - y <= p.max_gap_px + 1 &&
+                dark_bottom + 1 - feet_y <= p.feet_dark_height_fraction * *expected) {
+              feet_y = dark_bottom + 1;
+            }
             feet.push_back({x, feet_y, *expected});
-            out.feet_points_px.push_back(feet_px);
+            out.feet_points_px.push_back({x + 0.5, static_cast<double>(feet_y)});
             break;  // one robot per scan line stretch: the lowest
           } else if (keep_rejected) {
             out.rejected.push_back({feet_px, RobotRejectReason::kRunTooShort});
@@ -241,30 +257,44 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.proposal.feet_px.y() > b.proposal.feet_px.y();
   });
-  for (const Candidate& c : candidates) {
-    bool overlaps = false;
+  // A candidate overlapping a kept one is dropped: a feet point inside the lower part of a
+  // nearer robot's box is that robot's knee, hip or hand. One inside the upper part is a farther
+  // robot's, or the nearer robot's shoulder or arm: it comes after every free-standing candidate,
+  // so near robots' arms do not take the places of far robots under the cap.
+  enum class Fit { kFree, kBehind, kOverlap };
+  const auto fit = [&](const Candidate& c) {
+    Fit result = Fit::kFree;
     for (const RobotProposal& kept : out.proposals) {
-      // A feet point inside the lower part of a nearer robot's box is that robot's knee, hip
-      // or hand; higher up it is a farther robot's (a robot's own body makes none there).
       const Eigen::Vector2d& f = c.proposal.feet_px;
       const double kept_h = kept.box.height();
-      const bool inside = f.x() > kept.box.x0 && f.x() < kept.box.x1 &&
-                          f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h &&
-                          f.y() < kept.feet_px.y() - 0.1 * kept_h;
-      if (inside || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
-        overlaps = true;
-        break;
+      const bool in_column = f.x() > kept.box.x0 && f.x() < kept.box.x1;
+      const bool below_top = f.y() < kept.feet_px.y() - 0.1 * kept_h;
+      const bool lower_part = f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h;
+      if ((in_column && below_top && lower_part) || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
+        return Fit::kOverlap;
       }
+      if (in_column && below_top && f.y() > kept.box.y0) result = Fit::kBehind;
     }
-    if (overlaps || static_cast<int>(out.proposals.size()) >= p.max_proposals) {
+    return result;
+  };
+  std::vector<const Candidate*> behind;
+  const auto keep = [&](const Candidate& c, bool may_defer) {
+    const Fit f = fit(c);
+    if (f == Fit::kBehind && may_defer) {
+      behind.push_back(&c);
+      return;
+    }
+    if (f == Fit::kOverlap || static_cast<int>(out.proposals.size()) >= p.max_proposals) {
       if (keep_rejected) {
-        out.rejected.push_back(
-            {c.proposal.feet_px, overlaps ? RobotRejectReason::kOverlap : RobotRejectReason::kTooMany});
+        out.rejected.push_back({c.proposal.feet_px, f == Fit::kOverlap ? RobotRejectReason::kOverlap
+                                                                       : RobotRejectReason::kTooMany});
       }
-      continue;
+      return;
     }
     out.proposals.push_back(c.proposal);
-  }
+  };
+  for (const Candidate& c : candidates) keep(c, true);
+  for (const Candidate* c : behind) keep(*c, false);
   return out;
 }
 

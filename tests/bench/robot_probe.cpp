@@ -6,6 +6,7 @@
 // (green: demanded, grey: not), proposals (blue), percepts (red), feet points (yellow), rejected
 // candidates (magenta).
 //   robot_probe SCENARIO [frames_per_case] [case] [png_dir] [misses_only]
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -61,6 +62,7 @@ int probe(int argc, char** argv) {
   env("RP_RATIO", rpp.jump_ratio);
   env("RP_GAP", rpp.max_gap_px);
   env("RP_GAPH", rpp.max_gap_height_fraction);
+  env("RP_FEETDARK", rpp.feet_dark_height_fraction);
   env("RP_RUN", rpp.min_run_height_fraction);
   env("RP_FILL", rpp.min_fill_fraction);
   env("RP_MINW", rpp.min_width_fraction);
@@ -143,8 +145,10 @@ int probe(int argc, char** argv) {
         const auto& p = props[i];
         bool m = false;
         for (const RobotInImage& r : truth.robots) m = m || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
-        std::printf("   prop %zu feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) net=%.3f%s\n", i,
-                    p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
+        const int fx = std::clamp(static_cast<int>(p.feet_px.x()), 0, frame.ignore_mask->width - 1);
+        std::printf("   prop %zu feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) boundary=%d net=%.3f%s\n",
+                    i, p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
+                    frame.ignore_mask->top_y[fx],
                     frame.robot_net_confidences ? (*frame.robot_net_confidences)[i] : -1.f,
                     m ? " MATCH" : "");
       }

@@ -203,12 +203,74 @@ TEST(RobotProposer, FarRobotInTheUpperPartOfANearerBoxIsKept) {
       << "far feet " << far_feet.transpose() << describe(out);
 }
 
+TEST(RobotProposer, FeetStandAtTheBottomOfTheirDarkLowerPart) {
+  // The feet's dark side panels (darker than the carpet) under the bright legs: the robot stands
+  // at their bottom, not at the bright pixels above them (the darker reference after the dark
+  // stretch hides those rows from the brightness test; the orientation stage's feet region
+  // hangs from the feet row and lost the toes when it sat a few rows too high).
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(9, 70);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
+  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double w = h * 0.311 / 0.574;
+  const int panel_px = static_cast<int>(0.05 * h);
+  ASSERT_GE(panel_px, 5);
+  cv::Mat m = wrap(img);
+  for (double side : {-0.3, 0.3}) {
+    const double cx = feet.x() + side * w;
+    cv::rectangle(m, cv::Point(int(cx - 0.14 * w), int(feet.y()) - panel_px),
+                  cv::Point(int(cx + 0.14 * w), int(feet.y()) - 1), cv::Scalar(25), cv::FILLED);
+  }
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+}
+
+TEST(RobotProposer, ALongShadowBelowTheFeetIsNoPartOfThem) {
+  // A cast shadow longer than a foot below the white feet: the feet stay where the robot is.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(10, 90);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
+  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double w = h * 0.311 / 0.574;
+  cv::Mat m = wrap(img);
+  cv::rectangle(m, cv::Point(int(feet.x() - 0.6 * w), int(feet.y())),
+                cv::Point(int(feet.x() + 0.6 * w), int(feet.y() + 0.25 * h)), cv::Scalar(30),
+                cv::FILLED);
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+}
+
 TEST(RobotProposer, WrongSizedMaskIsAnError) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(4);
   const IgnoreMask small = IgnoreMask::all(320, 240);
   const ContrastRegions regions = HighContrastDetector().run(img.view(), IgnoreMask::all(640, 480));
   EXPECT_THROW(RobotProposer().run(img.view(), cam, small, regions), Error);
+}
+
+PixelBox pixelBox(double x0, double y0, double x1, double y1) {
+  PixelBox b;
+  b.x0 = x0;
+  b.y0 = y0;
+  b.x1 = x1;
+  b.y1 = y1;
+  return b;
+}
+
+TEST(RobotDetector, KeptBoxesDropOverlapsAndPartsOfALargerRobot) {
+  const RobotDetectorParams p;  // min 0.5, IoU 0.3, inside 0.9
+  const PixelBox robot = pixelBox(234, 84, 410, 364);
+  const PixelBox hand = pixelBox(340, 114, 408, 222);     // wholly inside the robot's box
+  const PixelBox shifted = pixelBox(250, 90, 420, 370);   // IoU with the robot's box > 0.3
+  const PixelBox other = pixelBox(500, 100, 560, 200);    // another robot beside it
+  const PixelBox half_out = pixelBox(380, 150, 450, 250); // half outside: no part of it
+  // The hand more confident than its robot: still the robot stays, the hand goes.
+  EXPECT_EQ(keptRobotBoxes({hand, robot, other}, {0.9f, 0.8f, 0.7f}, p), (std::vector<int>{1, 2}));
+  EXPECT_EQ(keptRobotBoxes({robot, hand}, {0.9f, 0.6f}, p), (std::vector<int>{0}));
+  EXPECT_EQ(keptRobotBoxes({robot, shifted}, {0.7f, 0.9f}, p), (std::vector<int>{1}));
+  EXPECT_EQ(keptRobotBoxes({robot, half_out}, {0.9f, 0.8f}, p), (std::vector<int>{0, 1}));
+  EXPECT_EQ(keptRobotBoxes({robot, other}, {0.4f, 0.6f}, p), (std::vector<int>{1}));  // below min
+  EXPECT_THROW(keptRobotBoxes({robot}, {}, p), Error);
 }
 
 TEST(Cns, SameResponseUnderTwoIlluminationLevels) {

@@ -28,6 +28,9 @@ struct RobotProposerParams {
   /// fraction of the expected robot height when more; a longer gap ends the run.
   int max_gap_px = 3;
   double max_gap_height_fraction = 0.04;
+  /// A stretch darker than the carpet just below the feet (their dark lower part, the contact
+  /// shadow) up to this fraction of the expected robot height moves the feet point to its bottom.
+  double feet_dark_height_fraction = 0.08;
   /// A run is a robot's lower body when it reaches at least this fraction of the expected pixel height
   /// of a robot whose feet are at its lower end (lines, the ball and shadows are shorter).
   double min_run_height_fraction = 0.4;
