@@ -31,6 +31,6 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
   --seed 1 --quiet
 # shellcheck disable=SC2086
 "$CF" learn robot --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
-  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml \
+  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
   --bootstrap $S/robot_absent.yaml --validation $S/robot_holdout.yaml $COMMON \
   --dataset "$DATA/robot"

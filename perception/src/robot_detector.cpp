@@ -14,6 +14,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   RobotDetectorParams p;
   p.min_confidence = f.getInRange("min_confidence", 0, 1);
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
+  p.max_inside_fraction = f.getInRange("max_inside_fraction", 0, 1);
   f.finish();
   return p;
 }
@@ -49,7 +50,47 @@ double boxIou(const PixelBox& a, const PixelBox& b) {
   const double uni = a.width() * a.height() + b.width() * b.height() - inter;
   return uni > 0 ? inter / uni : 0;
 }
+// The fraction of a's area inside b.
+double insideFraction(const PixelBox& a, const PixelBox& b) {
+  const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
+  const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
+  const double area = a.width() * a.height();
+  return area > 0 ? ix * iy / area : 0;
+}
 }  // namespace
+
+std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
+                                const std::vector<float>& confidence,
+                                const RobotDetectorParams& params) {
+  if (boxes.size() != confidence.size()) throw Error("keptRobotBoxes: one confidence per box");
+  std::vector<int> order;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    if (confidence[i] >= params.min_confidence) order.push_back(static_cast<int>(i));
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return confidence[a] > confidence[b]; });
+  const auto area = [](const PixelBox& b) { return b.width() * b.height(); };
+  const auto partOf = [&](const PixelBox& part, const PixelBox& whole) {
+    return area(whole) > area(part) && insideFraction(part, whole) >= params.max_inside_fraction;
+  };
+  // Most confident first; then a part (a box inside a larger kept one) goes, whichever of the
+  // two was the more confident.
+  std::vector<int> kept;
+  for (int i : order) {
+    bool drop = false;
+    for (int k : kept) {
+      drop |= boxIou(boxes[k], boxes[i]) > params.max_overlap_iou || partOf(boxes[i], boxes[k]);
+    }
+    if (!drop) kept.push_back(i);
+  }
+  std::vector<int> out;
+  for (int i : kept) {
+    bool part = false;
+    for (int k : kept) part |= k != i && partOf(boxes[i], boxes[k]);
+    if (!part) out.push_back(i);
+  }
+  return out;
+}
 
 std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const CameraModel& camera,
                                              const std::vector<RobotProposal>& proposals,
@@ -62,19 +103,16 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   for (const RobotProposal& p : proposals) boxes.push_back(robotPatchBox(p));
   std::vector<float> probs;
   net_.classify(image, boxes, probs);
-  std::vector<int> order;
+  std::vector<PixelBox> proposal_boxes;
+  std::vector<float> robot(proposals.size());
   for (std::size_t i = 0; i < proposals.size(); ++i) {
-    const float robot = probs[2 * i + 1];
-    if (confidences) confidences->push_back(robot);
-    if (robot >= params_.min_confidence) order.push_back(static_cast<int>(i));
+    robot[i] = probs[2 * i + 1];
+    proposal_boxes.push_back(proposals[i].box);
   }
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return probs[2 * a + 1] > probs[2 * b + 1]; });
-  for (int i : order) {
+  if (confidences) *confidences = robot;
+  const std::vector<int> final_index = keptRobotBoxes(proposal_boxes, robot, params_);
+  for (int i : final_index) {
     const RobotProposal& p = proposals[i];
-    bool overlaps = false;
-    for (const RobotPercept& kept : out) overlaps |= boxIou(kept.box, p.box) > params_.max_overlap_iou;
-    if (overlaps) continue;
     RobotPercept r;
     r.box = p.box;
     r.feet_px = p.feet_px;

@@ -15,7 +15,10 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.min_jump_gray = f.getInRange("min_jump_gray", 1, 255);
   p.jump_ratio = f.getInRange("jump_ratio", 0, 1);
   p.carpet_update_weight = f.getInRange("carpet_update_weight", 0, 1);
+  p.carpet_dark_decay = f.getInRange("carpet_dark_decay", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
+  p.max_gap_height_fraction = f.getInRange("max_gap_height_fraction", 0, 1);
+  p.feet_dark_height_fraction = f.getInRange("feet_dark_height_fraction", 0, 1);
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
   p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
@@ -26,6 +29,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.box_width_factor = f.getInRange("box_width_factor", 0.1, 10);
   p.box_height_factor = f.getInRange("box_height_factor", 0.1, 10);
   p.box_below_feet_fraction = f.getInRange("box_below_feet_fraction", 0, 1);
+  p.own_body_height_fraction = f.getInRange("own_body_height_fraction", 0.1, 1);
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
   p.max_proposals = static_cast<int>(f.getInRange("max_proposals", 0, 1000));
   f.finish();
@@ -110,17 +114,29 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         r = r_top - 1;
         if (y_hi - y_lo < 2) continue;
         double carpet = image.at(x, y_hi);
+        // The reference the robot must be brighter than: the running carpet luminance, but after
+        // a darker stretch (a shadow, the ball's black patches) it falls back to it only by
+        // carpet_dark_decay per row, so the carpet after a short dark stretch is no robot.
+        double ref = carpet;
+        // The stretch of pixels darker than the reference the scan passed last (rows, bottom
+        // and top; -1: none): the feet's dark side panels, or the contact shadow under them.
+        int dark_bottom = -1, dark_top = -1;
         int y = y_hi;
         while (y >= y_lo) {
           const double v = image.at(x, y);
-          const double thr = std::max(p.min_jump_gray, p.jump_ratio * carpet);
+          const double thr = std::max(p.min_jump_gray, p.jump_ratio * ref);
           // Shadows are darker than the carpet, the robots' feet and legs brighter.
-          if (v - carpet <= thr) {
+          if (v - ref <= thr) {
+            if (ref - v > thr) {
+              if (dark_top < 0 || dark_top - y > p.max_gap_px + 1) dark_bottom = y;
+              dark_top = y;
+            }
             carpet += p.carpet_update_weight * (v - carpet);
+            ref = std::max(carpet, ref * (1 - p.carpet_dark_decay));
             --y;
             continue;
           }
-          const int feet_y = y + 1;
+          int feet_y = y + 1;
           const Eigen::Vector2d feet_px(x + 0.5, feet_y);
           const auto expected = camera.robotHeightPx(feet_px, robot_height_m_);
           if (!expected) {
@@ -129,24 +145,35 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           }
           const int needed = static_cast<int>(std::ceil(p.min_run_height_fraction * *expected));
           // Above the feet, most pixels up to the needed height must differ from the carpet
-          // (a robot's legs, with gaps at the joints); the contiguous part decides where the
-          // scan goes on when the run is rejected.
+          // (a robot's legs, with gaps at the joints). Only the run that starts at the feet
+          // counts: a gap of carpet longer than a joint ends it, so a field line below a robot
+          // does not borrow the robot's pixels above the carpet between them.
+          const int max_gap =
+              std::max(p.max_gap_px, static_cast<int>(p.max_gap_height_fraction * *expected));
           int run_top = y, gap = 0, filled = 0;
-          bool contiguous = true;
           for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
-            if (image.at(x, yy) - carpet > thr) {
+            const double d = image.at(x, yy);
+            if (d - ref > thr || carpet - d > thr) {
               ++filled;
-              if (contiguous) run_top = yy;
+              run_top = yy;
               gap = 0;
-            } else if (++gap > p.max_gap_px) {
-              contiguous = false;
+            } else if (++gap > max_gap) {
+              break;
             }
           }
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
           } else if (filled >= p.min_fill_fraction * needed) {
+            // A dark stretch just below the bright feet (a joint's gap away at most) and no
+            // taller than a foot is the feet's dark lower part or their contact shadow: the
+            // robot stands at its bottom. (The darker reference after it hides those rows from
+            // the brightness test; the orientation stage's feet region hangs from this row.)
+            if (dark_top >= 0 && dark_top - y <= p.max_gap_px + 1 &&
+                dark_bottom + 1 - feet_y <= p.feet_dark_height_fraction * *expected) {
+              feet_y = dark_bottom + 1;
+            }
             feet.push_back({x, feet_y, *expected});
-            out.feet_points_px.push_back(feet_px);
+            out.feet_points_px.push_back({x + 0.5, static_cast<double>(feet_y)});
             break;  // one robot per scan line stretch: the lowest
           } else if (keep_rejected) {
             out.rejected.push_back({feet_px, RobotRejectReason::kRunTooShort});
@@ -230,27 +257,44 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.proposal.feet_px.y() > b.proposal.feet_px.y();
   });
-  for (const Candidate& c : candidates) {
-    bool overlaps = false;
+  // A candidate overlapping a kept one is dropped: a feet point inside the lower part of a
+  // nearer robot's box is that robot's knee, hip or hand. One inside the upper part is a farther
+  // robot's, or the nearer robot's shoulder or arm: it comes after every free-standing candidate,
+  // so near robots' arms do not take the places of far robots under the cap.
+  enum class Fit { kFree, kBehind, kOverlap };
+  const auto fit = [&](const Candidate& c) {
+    Fit result = Fit::kFree;
     for (const RobotProposal& kept : out.proposals) {
-      // A feet point inside a nearer robot's box is that robot's knee, hip or arm.
       const Eigen::Vector2d& f = c.proposal.feet_px;
-      const bool inside = f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() > kept.box.y0 &&
-                          f.y() < kept.feet_px.y() - 0.1 * kept.box.height();
-      if (inside || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
-        overlaps = true;
-        break;
+      const double kept_h = kept.box.height();
+      const bool in_column = f.x() > kept.box.x0 && f.x() < kept.box.x1;
+      const bool below_top = f.y() < kept.feet_px.y() - 0.1 * kept_h;
+      const bool lower_part = f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h;
+      if ((in_column && below_top && lower_part) || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
+        return Fit::kOverlap;
       }
+      if (in_column && below_top && f.y() > kept.box.y0) result = Fit::kBehind;
     }
-    if (overlaps || static_cast<int>(out.proposals.size()) >= p.max_proposals) {
+    return result;
+  };
+  std::vector<const Candidate*> behind;
+  const auto keep = [&](const Candidate& c, bool may_defer) {
+    const Fit f = fit(c);
+    if (f == Fit::kBehind && may_defer) {
+      behind.push_back(&c);
+      return;
+    }
+    if (f == Fit::kOverlap || static_cast<int>(out.proposals.size()) >= p.max_proposals) {
       if (keep_rejected) {
-        out.rejected.push_back(
-            {c.proposal.feet_px, overlaps ? RobotRejectReason::kOverlap : RobotRejectReason::kTooMany});
+        out.rejected.push_back({c.proposal.feet_px, f == Fit::kOverlap ? RobotRejectReason::kOverlap
+                                                                       : RobotRejectReason::kTooMany});
       }
-      continue;
+      return;
     }
     out.proposals.push_back(c.proposal);
-  }
+  };
+  for (const Candidate& c : candidates) keep(c, true);
+  for (const Candidate* c : behind) keep(*c, false);
   return out;
 }
 

@@ -103,12 +103,174 @@ TEST(RobotProposer, NothingOnBlankCarpetLinesOrABall) {
   EXPECT_FALSE(out.rejected.empty());  // the scan lines saw them and said why
 }
 
+// A robot whose legs have the given gray level above white feet `feet_px_tall` pixels high.
+Eigen::Vector2d drawShadedRobot(GrayImage& img, const CameraModel& cam, const Eigen::Vector2d& ground,
+                                int leg_gray, int feet_px_tall) {
+  const Eigen::Vector2d feet = *cam.robotToPixel({ground.x(), ground.y(), 0});
+  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double w = h * 0.311 / 0.574;
+  cv::Mat m = wrap(img);
+  for (double side : {-0.3, 0.3}) {
+    const double cx = feet.x() + side * w;
+    cv::rectangle(m, cv::Point(int(cx - 0.12 * w), int(feet.y() - 0.5 * h)),
+                  cv::Point(int(cx + 0.12 * w), int(feet.y()) - 1), cv::Scalar(leg_gray), cv::FILLED);
+    cv::rectangle(m, cv::Point(int(cx - 0.14 * w), int(feet.y()) - feet_px_tall),
+                  cv::Point(int(cx + 0.14 * w), int(feet.y()) - 1), cv::Scalar(210), cv::FILLED);
+  }
+  return feet;
+}
+
+std::string describe(const RobotProposals& out) {
+  std::string s;
+  for (const RobotProposal& p : out.proposals) {
+    s += " feet (" + std::to_string(p.feet_px.x()) + ", " + std::to_string(p.feet_px.y()) + ")";
+  }
+  for (const Eigen::Vector2d& f : out.feet_points_px) {
+    s += " <" + std::to_string(f.x()) + ", " + std::to_string(f.y()) + ">";
+  }
+  for (const RejectedRobotCandidate& r : out.rejected) {
+    s += " [" + std::string(robotRejectReasonName(r.reason)) + " (" + std::to_string(r.feet_px.x()) +
+         ", " + std::to_string(r.feet_px.y()) + ")]";
+  }
+  return s;
+}
+
+bool proposedAt(const RobotProposals& out, const Eigen::Vector2d& feet, double h) {
+  for (const RobotProposal& p : out.proposals) {
+    if (std::abs(p.feet_px.y() - feet.y()) <= 2.0 && std::abs(p.feet_px.x() - feet.x()) <= 0.15 * h) {
+      return true;
+    }
+  }
+  return false;
+}
+
+TEST(RobotProposer, FieldLineJustBelowTheFeetDoesNotBecomeTheFeet) {
+  // The line's run ends at the carpet between it and the feet; it must not count the robot's
+  // legs above that gap (it did: the proposal sat on the line, a robot height too low).
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(5);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
+  const double h = *cam.robotHeightPx(feet, 0.574);
+  cv::Mat m = wrap(img);
+  const int line_y = int(feet.y()) + 14;
+  cv::rectangle(m, cv::Point(0, line_y), cv::Point(639, line_y + 5), cv::Scalar(220), cv::FILLED);
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h));
+  for (const RobotProposal& p : out.proposals) EXPECT_LT(p.feet_px.y(), line_y - 4);
+}
+
+TEST(RobotProposer, LegsInShadeDarkerThanTheCarpetStillMakeARobot) {
+  // Directional light: white soles, the legs above them darker than the lit carpet.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(6, 90);
+  const Eigen::Vector2d feet = drawShadedRobot(img, cam, {2.0, 0.1}, 40, 6);
+  const double h = *cam.robotHeightPx(feet, 0.574);
+  EXPECT_TRUE(proposedAt(propose(img, cam), feet, h));
+}
+
+TEST(RobotProposer, BallCutByTheLowerBorderHidesNoRobotBehindIt) {
+  // A ball at the lower border (white with black patches): the carpet above its patches is no
+  // robot, and no box standing on it drops the feet of a far robot in its upper half.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(7);
+  const Eigen::Vector2d far_feet = drawRobot(img, cam, {4.0, 0.0});
+  const double h = *cam.robotHeightPx(far_feet, 0.574);
+  cv::Mat m = wrap(img);
+  const cv::Point c(int(far_feet.x()), 479 + 10);
+  cv::circle(m, c, 45, cv::Scalar(215), cv::FILLED);
+  for (int dx : {-24, 0, 24}) cv::circle(m, {c.x + dx, c.y - 28}, 9, cv::Scalar(25), cv::FILLED);
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, far_feet, h)) << "far feet " << far_feet.transpose() << describe(out);
+  for (const RobotProposal& p : out.proposals) EXPECT_LT(p.feet_px.y(), 420) << describe(out);
+}
+
+TEST(RobotProposer, FarRobotInTheUpperPartOfANearerBoxIsKept) {
+  // A far robot beside a near one, its feet inside the near robot's box but high above the near
+  // robot's feet (a knee or hand is no higher than half the robot).
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(8);
+  const Eigen::Vector2d near_px = *cam.robotToPixel({0.8, 0.0, 0});
+  const double near_w = *cam.robotHeightPx(near_px, 0.574) * 0.311 / 0.574;
+  const Eigen::Vector2d far_px0 = *cam.robotToPixel({3.0, 0.0, 0});
+  const auto far_ground = cam.pixelToGround({near_px.x() - 0.6 * near_w, far_px0.y()});
+  ASSERT_TRUE(far_ground.has_value());
+  const Eigen::Vector2d far_feet = drawRobot(img, cam, *far_ground);
+  const Eigen::Vector2d near_feet = drawRobot(img, cam, {0.8, 0.0});
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, near_feet, *cam.robotHeightPx(near_feet, 0.574)))
+      << "near feet " << near_feet.transpose() << describe(out);
+  EXPECT_TRUE(proposedAt(out, far_feet, *cam.robotHeightPx(far_feet, 0.574)))
+      << "far feet " << far_feet.transpose() << describe(out);
+}
+
+TEST(RobotProposer, FeetStandAtTheBottomOfTheirDarkLowerPart) {
+  // The feet's dark side panels (darker than the carpet) under the bright legs: the robot stands
+  // at their bottom, not at the bright pixels above them (the darker reference after the dark
+  // stretch hides those rows from the brightness test; the orientation stage's feet region
+  // hangs from the feet row and lost the toes when it sat a few rows too high).
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(9, 70);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
+  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double w = h * 0.311 / 0.574;
+  const int panel_px = static_cast<int>(0.05 * h);
+  ASSERT_GE(panel_px, 5);
+  cv::Mat m = wrap(img);
+  for (double side : {-0.3, 0.3}) {
+    const double cx = feet.x() + side * w;
+    cv::rectangle(m, cv::Point(int(cx - 0.14 * w), int(feet.y()) - panel_px),
+                  cv::Point(int(cx + 0.14 * w), int(feet.y()) - 1), cv::Scalar(25), cv::FILLED);
+  }
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+}
+
+TEST(RobotProposer, ALongShadowBelowTheFeetIsNoPartOfThem) {
+  // A cast shadow longer than a foot below the white feet: the feet stay where the robot is.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(10, 90);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
+  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double w = h * 0.311 / 0.574;
+  cv::Mat m = wrap(img);
+  cv::rectangle(m, cv::Point(int(feet.x() - 0.6 * w), int(feet.y())),
+                cv::Point(int(feet.x() + 0.6 * w), int(feet.y() + 0.25 * h)), cv::Scalar(30),
+                cv::FILLED);
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+}
+
 TEST(RobotProposer, WrongSizedMaskIsAnError) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(4);
   const IgnoreMask small = IgnoreMask::all(320, 240);
   const ContrastRegions regions = HighContrastDetector().run(img.view(), IgnoreMask::all(640, 480));
   EXPECT_THROW(RobotProposer().run(img.view(), cam, small, regions), Error);
+}
+
+PixelBox pixelBox(double x0, double y0, double x1, double y1) {
+  PixelBox b;
+  b.x0 = x0;
+  b.y0 = y0;
+  b.x1 = x1;
+  b.y1 = y1;
+  return b;
+}
+
+TEST(RobotDetector, KeptBoxesDropOverlapsAndPartsOfALargerRobot) {
+  const RobotDetectorParams p;  // min 0.5, IoU 0.3, inside 0.9
+  const PixelBox robot = pixelBox(234, 84, 410, 364);
+  const PixelBox hand = pixelBox(340, 114, 408, 222);     // wholly inside the robot's box
+  const PixelBox shifted = pixelBox(250, 90, 420, 370);   // IoU with the robot's box > 0.3
+  const PixelBox other = pixelBox(500, 100, 560, 200);    // another robot beside it
+  const PixelBox half_out = pixelBox(380, 150, 450, 250); // half outside: no part of it
+  // The hand more confident than its robot: still the robot stays, the hand goes.
+  EXPECT_EQ(keptRobotBoxes({hand, robot, other}, {0.9f, 0.8f, 0.7f}, p), (std::vector<int>{1, 2}));
+  EXPECT_EQ(keptRobotBoxes({robot, hand}, {0.9f, 0.6f}, p), (std::vector<int>{0}));
+  EXPECT_EQ(keptRobotBoxes({robot, shifted}, {0.7f, 0.9f}, p), (std::vector<int>{1}));
+  EXPECT_EQ(keptRobotBoxes({robot, half_out}, {0.9f, 0.8f}, p), (std::vector<int>{0, 1}));
+  EXPECT_EQ(keptRobotBoxes({robot, other}, {0.4f, 0.6f}, p), (std::vector<int>{1}));  // below min
+  EXPECT_THROW(keptRobotBoxes({robot}, {}, p), Error);
 }
 
 TEST(Cns, SameResponseUnderTwoIlluminationLevels) {

@@ -13,10 +13,12 @@ colorfree_floor_test(ball_game_floor ball_game.yaml 4
 colorfree_floor_test(ball_hard_floor ball_hard.yaml 6
   "ball.proposal_recall >= 0.87" "ball.detection_rate >= 0.75")
 
-# Robots, CI-sized detection set (4 cases x 4 frames). Measured: proposal recall 0.812, detection
-# 0.688, false positives 0.062 per frame (RobotNet from `colorfree learn robot`).
+# Robots, CI-sized detection set (4 cases x 4 frames). Measured: proposal recall 0.875, detection
+# 0.875, false positives 0.125 per frame (RobotNet retrained with robot_near_views_train on the
+# proposer whose feet include their dark lower part; before: detection 0.688; before robotprop:
+# recall 0.812, detection 0.688, 0.062 false positives per frame).
 colorfree_floor_test(robot_detection_floor ci/robot_detection_ci.yaml 4
-  "robot.proposal_recall >= 0.75" "robot.detection_rate >= 0.62" "robot.false_positives_per_frame <= 0.13")
+  "robot.proposal_recall >= 0.81" "robot.detection_rate >= 0.81" "robot.false_positives_per_frame <= 0.13")
 
 # Robot orientation, CI-sized static set (8 headings x 3 frames, 1.2 m). Measured: filtered
 # perceived 1.000, semi-perceived 0, false positives 0 (before OriNet saw a side's facing:

@@ -14,11 +14,22 @@ namespace colorfree {
 struct RobotDetectorParams {
   double min_confidence = 0.5;   ///< RobotNet's robot probability needed for a percept
   double max_overlap_iou = 0.3;  ///< of two accepted boxes overlapping more, the more confident stays
+  /// An accepted box with at least this fraction of its area inside a larger accepted box is a
+  /// part of that robot (its hand, arm or shoulder), whatever the confidences: the larger stays.
+  double max_inside_fraction = 0.9;
 
   bool operator==(const RobotDetectorParams&) const = default;
   static RobotDetectorParams load(const std::string& path);
   static RobotDetectorParams loadDefault();
 };
+
+/// Which of the boxes RobotNet accepted (`confidence` >= min_confidence) become percepts, most
+/// confident first: a box overlapping a kept one by more than max_overlap_iou is dropped, and a
+/// box lying max_inside_fraction inside a larger kept one is a part of it (hand, arm) and dropped
+/// even when it is the more confident. Indices into `boxes`.
+std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
+                                const std::vector<float>& confidence,
+                                const RobotDetectorParams& params);
 
 /// The proposal box as RobotNet's patch.
 cnn::PatchBox robotPatchBox(const RobotProposal& proposal);

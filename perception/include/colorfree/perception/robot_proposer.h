@@ -21,7 +21,16 @@ struct RobotProposerParams {
   double jump_ratio = 0.18;
   /// Carpet pixels are averaged into the running carpet luminance with this weight.
   double carpet_update_weight = 0.25;
-  int max_gap_px = 3;  ///< carpet-like pixels tolerated inside a robot run (a joint, a seam)
+  /// After a darker stretch (a shadow, the ball's black patches) the reference a robot must be
+  /// brighter than falls to the running carpet luminance by at most this fraction per row.
+  double carpet_dark_decay = 0.02;
+  /// Carpet-like pixels tolerated inside a robot run (a joint, a seam): this many, or this
+  /// fraction of the expected robot height when more; a longer gap ends the run.
+  int max_gap_px = 3;
+  double max_gap_height_fraction = 0.04;
+  /// A stretch darker than the carpet just below the feet (their dark lower part, the contact
+  /// shadow) up to this fraction of the expected robot height moves the feet point to its bottom.
+  double feet_dark_height_fraction = 0.08;
   /// A run is a robot's lower body when it reaches at least this fraction of the expected pixel height
   /// of a robot whose feet are at its lower end (lines, the ball and shadows are shorter).
   double min_run_height_fraction = 0.4;
@@ -42,6 +51,9 @@ struct RobotProposerParams {
   double box_width_factor = 1.25;   ///< proposed box width in expected robot widths
   double box_height_factor = 1.08;  ///< proposed box height in expected robot heights
   double box_below_feet_fraction = 0.04;  ///< box bottom below the feet, in expected heights
+  /// A feet point inside a nearer proposal's box up to this fraction of its height above its
+  /// feet is that robot's knee, hip or hand and is dropped (higher: a robot behind it).
+  double own_body_height_fraction = 0.5;
   double max_overlap_iou = 0.45;  ///< of two proposals overlapping more, the one lower in the image stays
   int max_proposals = 12;
 

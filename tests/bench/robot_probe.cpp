@@ -1,0 +1,224 @@
+// Development probe (not in CTest): renders the frames of a scenario and prints, per frame, every
+// true robot in view (ground pixel, distance, visible fraction, cut by a border, demanded or not),
+// every robot proposal (match, RobotNet's confidence) and, for a demanded robot that no proposal
+// matches, the feet points and rejected candidates near it with their reasons, so a miss can be
+// traced to the proposer's step that lost it. With a PNG folder, each frame is drawn: true boxes
+// (green: demanded, grey: not), proposals (blue), percepts (red), feet points (yellow), rejected
+// candidates (magenta).
+//   robot_probe SCENARIO [frames_per_case] [case] [png_dir] [misses_only]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "colorfree/groundtruth/field_markings.h"
+#include "colorfree/groundtruth/matching.h"
+#include "colorfree/groundtruth/scoring_params.h"
+#include "colorfree/groundtruth/truth_in_image.h"
+#include "colorfree/perception/error.h"
+#include "colorfree/perception/field_dimensions.h"
+#include "colorfree/perception/pipeline.h"
+#include "colorfree/sim/runner.h"
+#include "colorfree/sim/scenario.h"
+#include "colorfree/sim/world_renderer.h"
+
+using namespace colorfree;
+
+namespace {
+
+cv::Point pt(const Eigen::Vector2d& p) { return {int(std::lround(p.x())), int(std::lround(p.y()))}; }
+void box(cv::Mat& img, const PixelBox& b, cv::Scalar c, int t = 1) {
+  cv::rectangle(img, cv::Point(int(b.x0), int(b.y0)), cv::Point(int(b.x1), int(b.y1)), c, t);
+}
+
+int probe(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr,
+                 "usage: robot_probe SCENARIO [frames_per_case] [case] [png_dir] [misses_only]\n");
+    return 2;
+  }
+  const int frames = argc > 2 ? std::atoi(argv[2]) : -1;
+  const int only_case = argc > 3 ? std::atoi(argv[3]) : -1;
+  const std::string png_dir = argc > 4 ? argv[4] : "";
+  const bool misses_only = argc > 5 && std::atoi(argv[5]) != 0;
+  if (!png_dir.empty()) std::filesystem::create_directories(png_dir);
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  const FieldMarkings markings = FieldMarkings::fromDimensions(dims);
+  const ScoringParams scoring = ScoringParams::loadDefault();
+  PipelineConfig config = PipelineConfig::loadDefault();
+  // Quick parameter trials: RP_NAME=value overrides the file (RP_FREEZE, RP_FILL, RP_RUN, ...).
+  const auto env = [](const char* k, auto& v) {
+    if (const char* e = std::getenv(k)) v = static_cast<std::decay_t<decltype(v)>>(std::atof(e));
+  };
+  RobotProposerParams& rpp = config.robot_proposer;
+  env("RP_DECAY", rpp.carpet_dark_decay);
+  env("RP_UPDATE", rpp.carpet_update_weight);
+  env("RP_JUMP", rpp.min_jump_gray);
+  env("RP_RATIO", rpp.jump_ratio);
+  env("RP_GAP", rpp.max_gap_px);
+  env("RP_GAPH", rpp.max_gap_height_fraction);
+  env("RP_FEETDARK", rpp.feet_dark_height_fraction);
+  env("RP_RUN", rpp.min_run_height_fraction);
+  env("RP_FILL", rpp.min_fill_fraction);
+  env("RP_MINW", rpp.min_width_fraction);
+  env("RP_JOINH", rpp.join_height_fraction);
+  env("RP_JOINGAP", rpp.join_gap_width_fraction);
+  env("RP_IOU", rpp.max_overlap_iou);
+  env("RP_OWN", rpp.own_body_height_fraction);
+  env("RP_MAX", rpp.max_proposals);
+  const Pipeline pipeline(config);
+  const RobotProposer proposer(config.robot_proposer, config.field);
+  sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
+  int truths = 0, prop_hits = 0, hits = 0, fps = 0, frames_seen = 0;
+  long proposals = 0;
+  for (int c = 0; c < runner.caseCount(); ++c) {
+    if (only_case >= 0 && c != only_case) continue;
+    RobotTracks tracks;
+    runner.runCase(c, frames, true, [&](const sim::RenderedFrame& f) {
+      const FrameTruth truth = computeFrameTruth(f.truth, markings, dims, scoring);
+      Frame frame(f.image.view(), f.truth.camera.model);
+      pipeline.process(frame, nullptr, &tracks);
+      const CameraModel& cam = f.truth.camera.model;
+      const RobotProposals rp = proposer.run(frame.image, cam, *frame.ignore_mask,
+                                             *frame.contrast_regions, true);
+      ++frames_seen;
+      const auto& props = *frame.robot_proposals;
+      proposals += static_cast<long>(props.size());
+      const auto& percepts = *frame.robot_percepts;
+      const Eigen::Isometry3d r2f = robotToField(truth.observer);
+      auto feetInField = [&](const Eigen::Vector2d& px) -> std::optional<Eigen::Vector2d> {
+        const auto g = cam.pixelToGround(px);
+        if (!g) return std::nullopt;
+        return Eigen::Vector2d((r2f * Eigen::Vector3d(g->x(), g->y(), 0)).head<2>());
+      };
+      std::printf("case %d %s frame %d: %zu proposals, %zu percepts\n", c,
+                  runner.scenarioCase(c).name().c_str(), f.frame_index, props.size(),
+                  percepts.size());
+      bool frame_miss = false;
+      std::vector<PixelBox> missed_boxes;
+      const double W = cam.width(), H = cam.height();
+      for (const RobotInImage& r : truth.robots) {
+        if (!r.in_view) continue;
+        const bool cut = r.box.x0 <= 0.5 || r.box.y0 <= 0.5 || r.box.x1 >= W - 0.5 ||
+                         r.box.y1 >= H - 0.5;
+        std::string cuts;
+        if (r.box.x0 <= 0.5) cuts += "L";
+        if (r.box.x1 >= W - 0.5) cuts += "R";
+        if (r.box.y0 <= 0.5) cuts += "T";
+        if (r.box.y1 >= H - 0.5) cuts += "B";
+        bool ph = false, dh = false;
+        for (const auto& p : props) ph = ph || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
+        for (const auto& p : percepts) dh = dh || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
+        std::printf("  R%d ground=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) d=%.2f vis=%.2f %s%s%s%s\n",
+                    r.index, r.ground_px.x(), r.ground_px.y(), r.box.x0, r.box.y0, r.box.x1,
+                    r.box.y1, r.distance_m, r.visible_fraction, cut ? "cut:" : "", cuts.c_str(),
+                    r.should_detect ? " DEMANDED" : "",
+                    r.should_detect ? (!ph ? " >>> PROPOSAL MISS" : !dh ? " >>> NET MISS" : " ok")
+                                    : "");
+        if (!r.should_detect) continue;
+        ++truths;
+        prop_hits += ph;
+        hits += dh;
+        if (!dh) frame_miss = true;
+        if (ph) continue;
+        missed_boxes.push_back(r.box);
+        for (const auto& fp : rp.feet_points_px) {
+          if (fp.x() >= r.box.x0 && fp.x() <= r.box.x1 && fp.y() >= r.box.y0 &&
+              fp.y() <= r.box.y1 + 10) {
+            std::printf("     feet point (%.0f,%.0f)\n", fp.x(), fp.y());
+          }
+        }
+        for (const auto& rj : rp.rejected) {
+          if (rj.feet_px.x() >= r.box.x0 && rj.feet_px.x() <= r.box.x1 &&
+              rj.feet_px.y() >= r.box.y0 && rj.feet_px.y() <= r.box.y1 + 10) {
+            std::printf("     rejected (%.0f,%.0f) %s\n", rj.feet_px.x(), rj.feet_px.y(),
+                        robotRejectReasonName(rj.reason));
+          }
+        }
+      }
+      for (std::size_t i = 0; i < props.size(); ++i) {
+        const auto& p = props[i];
+        bool m = false;
+        for (const RobotInImage& r : truth.robots) m = m || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
+        const int fx = std::clamp(static_cast<int>(p.feet_px.x()), 0, frame.ignore_mask->width - 1);
+        std::printf("   prop %zu feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) boundary=%d net=%.3f%s\n",
+                    i, p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
+                    frame.ignore_mask->top_y[fx],
+                    frame.robot_net_confidences ? (*frame.robot_net_confidences)[i] : -1.f,
+                    m ? " MATCH" : "");
+      }
+      for (const auto& p : percepts) {
+        bool m = false;
+        for (const RobotInImage& r : truth.robots) m = m || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
+        if (!m) {
+          ++fps;
+          frame_miss = true;
+          std::printf("   FALSE POSITIVE feet=(%.0f,%.0f) conf=%.3f\n", p.feet_px.x(), p.feet_px.y(),
+                      p.confidence);
+        }
+      }
+      if (!png_dir.empty() && (!misses_only || frame_miss)) {
+        cv::Mat gray(f.image.height(), f.image.width(), CV_8UC1,
+                     const_cast<std::uint8_t*>(f.image.data()));
+        cv::Mat img;
+        cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
+        const ContrastRegions& cr = *frame.contrast_regions;
+        for (int wr = 0; wr < cr.rows; ++wr) {
+          for (int wc = 0; wc < cr.columns; ++wc) {
+            if (!cr.marked(wc, wr)) continue;
+            const int w = cr.window_px;
+            cv::rectangle(img, {wc * w, wr * w}, {wc * w + w - 1, wr * w + w - 1}, {96, 96, 0}, 1);
+          }
+        }
+        for (const RobotInImage& r : truth.robots) {
+          if (r.in_view) box(img, r.box, r.should_detect ? cv::Scalar(0, 255, 0) : cv::Scalar(128, 128, 128));
+        }
+        for (const auto& p : props) box(img, p.box, {255, 0, 0});
+        for (const auto& p : percepts) box(img, p.box, {0, 0, 255}, 2);
+        for (const auto& fp : rp.feet_points_px) cv::circle(img, pt(fp), 2, {0, 255, 255}, -1);
+        for (const auto& rj : rp.rejected) cv::drawMarker(img, pt(rj.feet_px), {255, 0, 255}, cv::MARKER_CROSS, 5, 1);
+        char name[256];
+        std::snprintf(name, sizeof name, "%s/c%02d_f%03d.png", png_dir.c_str(), c, f.frame_index);
+        if (!cv::imwrite(name, img)) throw Error(std::string(name) + ": cannot write");
+        // Each robot no proposal matched, cropped with a margin and enlarged 4 times.
+        for (std::size_t k = 0; k < missed_boxes.size(); ++k) {
+          const PixelBox& b = missed_boxes[k];
+          const int mx = int(b.width() * 0.5) + 4, my = int(b.height() * 0.2) + 4;
+          const cv::Rect roi(cv::Point(std::max(0, int(b.x0) - mx), std::max(0, int(b.y0) - my)),
+                             cv::Point(std::min(img.cols, int(b.x1) + mx), std::min(img.rows, int(b.y1) + my)));
+          cv::Mat big;
+          cv::resize(cv::Mat(gray, roi), big, {}, 4, 4, cv::INTER_NEAREST);
+          cv::Mat big_c, ann;
+          cv::resize(cv::Mat(img, roi), ann, {}, 4, 4, cv::INTER_NEAREST);
+          cv::cvtColor(big, big_c, cv::COLOR_GRAY2BGR);
+          cv::Mat both;
+          cv::hconcat(big_c, ann, both);
+          std::snprintf(name, sizeof name, "%s/c%02d_f%03d_miss%zu.png", png_dir.c_str(), c, f.frame_index, k);
+          if (!cv::imwrite(name, both)) throw Error(std::string(name) + ": cannot write");
+        }
+      }
+    });
+  }
+  std::printf("frames %d truths %d proposal hits %d (%.3f) detected %d (%.3f) false positives %d "
+              "(%.3f/frame) proposals/frame %.2f\n",
+              frames_seen, truths, prop_hits, truths ? double(prop_hits) / truths : 0, hits,
+              truths ? double(hits) / truths : 0, fps, frames_seen ? double(fps) / frames_seen : 0,
+              frames_seen ? double(proposals) / frames_seen : 0);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return probe(argc, argv);
+  } catch (const std::exception& e) {  // a broken scenario, an unwritable folder
+    std::fprintf(stderr, "robot_probe: %s\n", e.what());
+    return 2;
+  }
+}
