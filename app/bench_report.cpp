@@ -295,6 +295,24 @@ json scenarioSummary(const BenchExperiment& e, const json& r) {
   return o;
 }
 
+// The detectors a hard set's table shows: those with something to demand there; at least one
+// row per experiment (the robot's), so its unmet expectations always show.
+std::vector<std::string> scenarioRowObjects(const json& sc) {
+  std::vector<std::string> shown;
+  for (const std::string object : {"ball", "robot"}) {
+    const json& m = sc.at(object);
+    if (m.at("detection_rate").is_number() || m.at("proposal_recall").is_number()) shown.push_back(object);
+  }
+  if (shown.empty()) shown.push_back("robot");
+  return shown;
+}
+
+std::string unmetText(const json& sc) {
+  std::string unmet;
+  for (const auto& u : sc.at("unmet")) unmet += (unmet.empty() ? "" : "; ") + u.get<std::string>();
+  return unmet;
+}
+
 json benchSummary(const BenchPlan& plan, const json& experiments) {
   json s;
   std::string id;
@@ -453,15 +471,11 @@ void printBenchTables(const json& results) {
                 "recall", "props/f", "detection", "FP/frame", "expectations unmet");
     for (const auto& sc : s.at("scenarios")) {
       bool first = true;
-      for (const std::string object : {"ball", "robot"}) {
+      for (const std::string& object : scenarioRowObjects(sc)) {
         const json& m = sc.at(object);
-        const bool last = object == "robot";
-        if (!m.at("detection_rate").is_number() && !m.at("proposal_recall").is_number() && !(first && last)) {
-          continue;  // a row for a detector with something to demand; one row per experiment at least
-        }
         std::string unmet;
         if (first) {
-          for (const auto& u : sc.at("unmet")) unmet += (unmet.empty() ? "" : "; ") + u.get<std::string>();
+          unmet = unmetText(sc);
           if (unmet.empty()) unmet = "none (of " + std::to_string(sc.at("expectations").get<long>()) + ")";
         }
         std::printf("  %-18s %6s %-6s %8s %9s %7s %9s %10s  %s\n",
@@ -608,16 +622,9 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
          "<th>proposal recall</th><th>proposals per frame</th><th>detection rate</th><th>false positives per "
          "frame</th><th>expectations not met</th></tr>";
     for (const auto& sc : s.at("scenarios")) {
-      bool first = true;
-      for (const std::string object : {"ball", "robot"}) {
+      const std::string unmet = unmetText(sc);
+      for (const std::string& object : scenarioRowObjects(sc)) {
         const json& m = sc.at(object);
-        const bool last = object == "robot";
-        if (!m.at("detection_rate").is_number() && !m.at("proposal_recall").is_number() && !(first && last)) {
-          continue;
-        }
-        first = false;
-        std::string unmet;
-        for (const auto& u : sc.at("unmet")) unmet += (unmet.empty() ? "" : "; ") + u.get<std::string>();
         h << "<tr><td><a href='#" << esc(sc.at("experiment").get<std::string>()) << "'>"
           << esc(sc.at("experiment").get<std::string>()) << "</a></td><td>" << sc.at("frames").get<long>()
           << "</td><td>" << object << "</td><td>" << cell(m.at("should_detect"), 0) << "</td><td>"
