@@ -152,13 +152,12 @@ void gaussianPass(const FloatImage& in, FloatImage& out, const std::vector<float
 
 }  // namespace
 
-FloatImage applyOptics(const FloatImage& image, const EffectsSpec& effects) {
+FloatImage applyOptics(FloatImage image, const EffectsSpec& effects) {
   const double sigma = effects.defocus_px, glare = effects.veiling_glare;
   if (!std::isfinite(sigma) || sigma < 0 || sigma > 20 || !std::isfinite(glare) || glare < 0 || glare > 0.9) {
     throw Error("camera effects: defocus_px must be in [0, 20] and veiling_glare in [0, 0.9]");
   }
-  FloatImage out = image;
-  if (image.pixels.empty()) return out;
+  if (image.pixels.empty() || (sigma == 0 && glare == 0)) return image;  // no copy when off
   if (sigma > 0) {
     const int radius = std::max(1, static_cast<int>(std::ceil(3 * sigma)));
     std::vector<float> kernel(2 * radius + 1);
@@ -167,16 +166,16 @@ FloatImage applyOptics(const FloatImage& image, const EffectsSpec& effects) {
     for (float& v : kernel) v = static_cast<float>(v / total);
     FloatImage tmp = image;
     gaussianPass(image, tmp, kernel, true);
-    gaussianPass(tmp, out, kernel, false);
+    gaussianPass(tmp, image, kernel, false);
   }
   if (glare > 0) {
     double mean = 0;
-    for (float v : out.pixels) mean += v;
-    mean /= static_cast<double>(out.pixels.size());
+    for (float v : image.pixels) mean += v;
+    mean /= static_cast<double>(image.pixels.size());
     const float keep = static_cast<float>(1 - glare), lift = static_cast<float>(glare * mean);
-    for (float& v : out.pixels) v = keep * v + lift;
+    for (float& v : image.pixels) v = keep * v + lift;
   }
-  return out;
+  return image;
 }
 
 GrayImage applySensor(const FloatImage& exposure, const EffectsSpec& effects, std::uint64_t seed) {

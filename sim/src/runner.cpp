@@ -198,7 +198,7 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
   }
   frame.truth.camera.model = renderer.cameraModel(settings.camera, w, h);
   frame.truth.camera.camera_to_field = renderer.cameraToField(settings.camera);
-  exposure = applyOptics(exposure, settings.effects);
+  exposure = applyOptics(std::move(exposure), settings.effects);
   frame.image = applySensor(exposure, settings.effects, frameSeed(settings.seed, frame_index));
   return frame;
 }

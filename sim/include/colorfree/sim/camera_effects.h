@@ -63,7 +63,7 @@ FloatImage smearAlong(const FloatImage& image, double step_x_px, double step_y_p
 /// mean. Both keep the frame's mean light (up to the edge repeat); glare lifts the blacks and
 /// flattens contrast as a real lens in a dim hall does. Throws colorfree::Error for a value out of
 /// range (σ not in [0, 20], g not in [0, 0.9], or not finite).
-FloatImage applyOptics(const FloatImage& image, const EffectsSpec& effects);
+FloatImage applyOptics(FloatImage image, const EffectsSpec& effects);
 
 /// Exposure/gain and sensor noise: value × gain, plus Gaussian noise of variance
 /// noise_sigma² + shot_noise × value, rounded and clipped to 0..255. `seed` fixes the noise.
