@@ -16,7 +16,13 @@ namespace {
 
 std::string model(const std::string& name) { return defaultModelDir() + "/" + name; }
 
-std::string tempPath(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+// Named after the running test too: CTest runs the tests of this file as parallel processes,
+// which must not share /tmp/bad.cfg (one renamed the other's bad.cfg.tmp away).
+std::string tempPath(const std::string& name) {
+  const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string prefix = t ? std::string(t->test_suite_name()) + "." + t->name() + "." : "";
+  return ::testing::TempDir() + "/" + prefix + name;
+}
 
 void writeText(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
