@@ -42,6 +42,8 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.centre_search_fraction = f.getInRange("centre_search_fraction", 0, 2);
   p.radius_tolerance = f.getInRange("radius_tolerance", 0, 0.5);
   p.min_gradient = f.getInRange("min_gradient", 0, 255);
+  p.centre_ridge_fraction = f.getInRange("centre_ridge_fraction", 0, 1);
+  p.centre_ridge_min_radius_px = f.getInRange("centre_ridge_min_radius_px", 0, 500);
   f.finish();
   if (p.line_count > p.max_count) throw Error(path + ": line_count must not exceed max_count");
   if (p.max_radius_px <= p.min_radius_px) {
@@ -330,15 +332,22 @@ void responsesInside(const RowBoxes& g, const int* cols, int n, float texture_ga
 // strong votes for the points r along its gradient, both ways (the ball is brighter than the
 // carpet, or darker when the carpet is overexposed), over radii (1 ± radius_tolerance) r; the votes
 // are accumulated on a grid of cells about r / 8 wide within centre_search_fraction r of (x, y) and
-// smoothed over 3x3 cells. Returns (x, y) when no cell gets votes.
-// `acc` is scratch space (reused between calls).
+// smoothed over 3x3 cells. The centre is the best smoothed cell, or, with centre_ridge_fraction in
+// (0, 1), the centroid of the cells around it on its ridge (see the parameter). Returns (x, y) when
+// no cell gets votes.
+struct CentringScratch {
+  std::vector<float> votes, smoothed;
+  std::vector<int> stack;
+};
+
 Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p,
-                                std::vector<float>& acc) {
+                                CentringScratch& scratch) {
   const double search = p.centre_search_fraction * r;
   if (search < 1) return {x, y};
   const int cell = std::max(1, static_cast<int>(r / 8));
   const int half = static_cast<int>(std::ceil(search / cell));
   const int n = 2 * half + 1;
+  std::vector<float>& acc = scratch.votes;
   acc.assign(static_cast<std::size_t>(n) * n, 0.f);
   const double reach = search + (1 + p.radius_tolerance) * r + 1;
   const int x0 = std::max(1, static_cast<int>(x - reach)), x1 = std::min(image.width - 2, static_cast<int>(x + reach));
@@ -374,6 +383,12 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
       }
     }
   }
+  // (not for a ball the image border cuts: its visible arc alone votes, and the centroid of the
+  // cells drifts into the image)
+  const bool ridge = p.centre_ridge_fraction > 0 && p.centre_ridge_fraction < 1 && r >= p.centre_ridge_min_radius_px &&
+                     x - r >= 0 && y - r >= 0 && x + r <= image.width && y + r <= image.height;
+  std::vector<float>& sm = scratch.smoothed;
+  if (ridge) sm.assign(static_cast<std::size_t>(n) * n, 0.f);
   float best = 0;
   int bi = half, bj = half;
   for (int j = 0; j < n; ++j) {
@@ -384,10 +399,39 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
       for (int b = std::max(0, j - 1); b <= std::min(n - 1, j + 1); ++b) {
         for (int a = std::max(0, i - 1); a <= std::min(n - 1, i + 1); ++a) v += acc[static_cast<std::size_t>(b) * n + a];
       }
+      if (ridge) sm[static_cast<std::size_t>(j) * n + i] = v;
       if (v > best) best = v, bi = i, bj = j;
     }
   }
-  return {x + (bi - half) * cell, y + (bj - half) * cell};
+  if (!ridge || best <= 0) return {x + (bi - half) * cell, y + (bj - half) * cell};
+  // The ridge: the cells 8-connected to the best one with at least the threshold (cells outside
+  // the search disc are 0, so it stays inside); each is marked by setting it below 0 once taken.
+  const float threshold = static_cast<float>(p.centre_ridge_fraction) * best;
+  std::vector<int>& stack = scratch.stack;
+  stack.clear();
+  stack.push_back(bj * n + bi);
+  double sw = 0, si = 0, sj = 0;
+  float& first = sm[static_cast<std::size_t>(bj) * n + bi];
+  first = -first - 1;  // taken (a taken cell's value v is stored as -v - 1 < 0)
+  while (!stack.empty()) {
+    const int k = stack.back();
+    stack.pop_back();
+    const int i = k % n, j = k / n;
+    const double w = -sm[static_cast<std::size_t>(k)] - 1 - threshold;
+    sw += w;
+    si += w * i;
+    sj += w * j;
+    for (int b = std::max(0, j - 1); b <= std::min(n - 1, j + 1); ++b) {
+      for (int a = std::max(0, i - 1); a <= std::min(n - 1, i + 1); ++a) {
+        float& v = sm[static_cast<std::size_t>(b) * n + a];
+        if (v < threshold) continue;  // below the threshold, or taken already
+        v = -v - 1;
+        stack.push_back(b * n + a);
+      }
+    }
+  }
+  if (sw <= 0) return {x + (bi - half) * cell, y + (bj - half) * cell};
+  return {x + (si / sw - half) * cell, y + (sj / sw - half) * cell};
 }
 
 // The median grey level of the looked-at pixels (every 4th pixel of every 4th row); of the whole
@@ -626,7 +670,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   std::stable_sort(line_candidates.begin(), line_candidates.end(), by_response);
   std::vector<BallProposal> out;
   std::vector<Eigen::Vector2d> raw_centres;  // the scan's positions of the proposals in `out`
-  std::vector<float> votes;                  // centreFromEdges' scratch
+  CentringScratch scratch;                   // centreFromEdges' scratch
   const auto near = [&](double x, double y, double r) {
     for (std::size_t k = 0; k < out.size(); ++k) {
       const double d = p.nms_fraction * std::max<double>(r, out[k].radius_px);
@@ -643,7 +687,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       if (near(c.x, c.y, c.r)) continue;
       // The centre: where the outline's gradients point to at the expected radius (robust to the
       // shading of the ball's lower half and to its shadow, which pull the DoG's peak upwards).
-      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p, votes);
+      const Eigen::Vector2d centre = centreFromEdges(image, c.x, c.y, c.r, p, scratch);
       if (near(centre.x(), centre.y(), c.r)) continue;  // the same ball as an earlier one
       BallProposal prop;
       prop.centre_px = centre;

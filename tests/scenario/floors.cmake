@@ -9,9 +9,10 @@ colorfree_floor_test(ball_game_floor ball_game.yaml 4
   "ball.proposal_recall >= 0.95" "ball.detection_rate >= 0.95" "ball.false_positives_per_frame <= 0.03")
 
 # Ball, hard set (4 cases x 6 frames, 8 balls to detect). Measured: proposal recall 1.000,
-# detection 0.875.
+# detection 1.000, false positives 0.000 per frame (the smeared ball's centre from its vote ridge;
+# before: detection 0.875; one miss is the margin).
 colorfree_floor_test(ball_hard_floor ball_hard.yaml 6
-  "ball.proposal_recall >= 0.87" "ball.detection_rate >= 0.75")
+  "ball.proposal_recall >= 0.87" "ball.detection_rate >= 0.87")
 
 # Robots, CI-sized detection set (4 cases x 4 frames). Measured: proposal recall 0.875, detection
 # 0.875, false positives 0.125 per frame (RobotNet retrained with robot_near_views_train on the

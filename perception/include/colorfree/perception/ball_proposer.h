@@ -76,6 +76,16 @@ struct BallProposerParams {
   double centre_search_fraction = 1.0;
   double radius_tolerance = 0.12;
   double min_gradient = 6.0;
+  /// The centre is the weighted centroid (weights: votes minus the threshold) of the cells
+  /// connected to the best one whose smoothed votes reach centre_ridge_fraction × the best: a ball
+  /// smeared along its motion (a long exposure, a turning head) votes along a ridge the length of
+  /// the smear, whose middle is the ball's centre at mid-exposure and whose best cell can be at
+  /// either end. 0 (or 1): the best cell itself.
+  double centre_ridge_fraction = 0.3;
+  /// ... for expected radii of at least centre_ridge_min_radius_px: below, the search disc (one
+  /// radius) is a few one-pixel cells, too small for a smear's ridge, and the centroid only moves a
+  /// far ball's proposal by noise.
+  double centre_ridge_min_radius_px = 6.0;
 
   bool operator==(const BallProposerParams&) const = default;
   static BallProposerParams load(const std::string& path);
