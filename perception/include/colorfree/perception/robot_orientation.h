@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +25,18 @@ struct CnsImage {
 };
 CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int width, int height,
                                  int variance_radius_px, double sigma_gray);
+
+/// The lower silhouette's edge pixels of a region: 1 where minus the CNS's gy exceeds
+/// `threshold` (brighter above than below), else 0; row-major, the region clamped to the image as
+/// for CnsImage. The same answers as thresholding contrastNormalizedSobel's -gy, with no gx and no
+/// normalizer where the Sobel alone is too weak to pass (the normalizer is never above 1/σ).
+struct CnsEdgeMask {
+  int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the region in image pixels
+  std::vector<std::uint8_t> on;
+  bool at(int x, int y) const { return on[(y - y0) * width + (x - x0)] != 0; }
+};
+CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width, int height,
+                                int variance_radius_px, double sigma_gray, double threshold);
 
 /// Parameters of the orientation stage (perception/params/robot_orientation.yaml).
 struct RobotOrientationParams {
