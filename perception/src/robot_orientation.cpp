@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <Eigen/Eigenvalues>
 
 #include "colorfree/perception/cnn/shipped_nets.h"
@@ -18,7 +19,7 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.feet_region_below_fraction = f.getInRange("feet_region_below_fraction", 0, 1);
   p.scan_step_px = static_cast<int>(f.getInRange("scan_step_px", 1, 16));
   p.median_width_px = static_cast<int>(f.getInRange("median_width_px", 1, 9));
-  p.variance_radius_px = static_cast<int>(f.getInRange("variance_radius_px", 1, 8));
+  p.variance_radius_px = static_cast<int>(f.getInRange("variance_radius_px", 1, kMaxEdgeMaskRadiusPx));
   p.cns_sigma_gray = f.getInRange("cns_sigma_gray", 0.01, 255);
   p.cns_threshold = f.getInRange("cns_threshold", 0, 2);
   p.silhouette_min_rows = static_cast<int>(f.getInRange("silhouette_min_rows", 1, 8));
@@ -186,35 +187,56 @@ CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width
   out.on.assign(static_cast<std::size_t>(r.width) * r.height, 0);
   if (r.width == 0 || r.height == 0) return out;
   radius = std::max(radius, 0);
+  if (radius > kMaxEdgeMaskRadiusPx) {
+    throw Error("brightAboveEdgeMask: variance radius " + std::to_string(radius) + " px is above " +
+                std::to_string(kMaxEdgeMaskRadiusPx) + " (the window's sums must fit 32 bits)");
+  }
   const CnsNormalizer norm(radius, sigma);
+  const auto n = static_cast<std::int32_t>(norm.n);
   const float t = static_cast<float>(threshold);
-  const double t2 = static_cast<double>(t) * t;
-  // The normalizer is never above 1/σ, so a pixel whose Sobel alone is at most threshold·σ
-  // cannot pass (a margin for the float rounding of the normalizer): most of the carpet is
-  // decided without the square root.
-  const auto min_sobel = static_cast<std::int32_t>(std::floor(threshold * sigma * (1 - 1e-4)));
-  std::vector<std::int32_t> minus_gy(r.width);
+  const float t2 = t * t;
+  std::vector<std::int32_t> minus_gy(r.width), s(r.width), s2(r.width);
+  std::vector<std::int32_t> decided(r.width);
   forEachCnsRow(image, r, radius,
                 [&](int y, const std::int32_t* up, const std::int32_t*, const std::int32_t* down,
                     const std::int32_t* vs, const std::int32_t* vs2) {
+                  // Loops the compiler vectorises: the Sobel, the window sums, the decision.
                   for (int x = 0; x < r.width; ++x) minus_gy[x] = -sobelY(up + x, down + x);
+                  std::fill(s.begin(), s.end(), 0);
+                  std::fill(s2.begin(), s2.end(), 0);
+                  for (int i = -radius; i <= radius; ++i) {
+                    for (int x = 0; x < r.width; ++x) {
+                      s[x] += vs[x + i];
+                      s2[x] += vs2[x + i];
+                    }
+                  }
                   std::uint8_t* on = &out.on[static_cast<std::size_t>(y) * r.width];
+                  // Locals, so that the stores below alias none of the loop's inputs.
+                  const int width = r.width;
+                  const std::int32_t nn = n, *ps = s.data(), *ps2 = s2.data(), *pg = minus_gy.data();
+                  const float inv_n2 = norm.inv_n2, sigma2 = norm.sigma2, tt2 = t2;
+                  std::int32_t* pd = decided.data();
+                  for (int x = 0; x < width; ++x) {
+                    // (-gy) / sqrt(q) > t on the squares (the float q as CnsNormalizer::squared
+                    // gives it; the squared Sobel is exact in a float) ...
+                    const std::int32_t var_n2 = std::max(0, nn * ps2[x] - ps[x] * ps[x]);
+                    const float q = 64.0f * static_cast<float>(var_n2) * inv_n2 + sigma2;
+                    const float g = static_cast<float>(std::max(pg[x], 0));
+                    const float g2 = g * g, t2q = tt2 * q;
+                    const auto above = static_cast<std::int32_t>(g2 > t2q * (1 + 1e-5f));
+                    const auto near = static_cast<std::int32_t>(g2 >= t2q * (1 - 1e-5f));
+                    pd[x] = static_cast<std::int32_t>(pg[x] > 0) * (above + 2 * (near - above));  // 1 on, 2 a tie
+                  }
+                  bool any_tie = false;
                   for (int x = 0; x < r.width; ++x) {
-                    if (minus_gy[x] < min_sobel) continue;
-                    std::int64_t s = 0, s2 = 0;
-                    for (int i = -radius; i <= radius; ++i) {
-                      s += vs[x + i];
-                      s2 += vs2[x + i];
-                    }
-                    // (-gy) / sqrt(q) > t, decided on the squares away from a tie; near one,
-                    // as contrastNormalizedSobel computes gy (negated: exact in floating point).
-                    const float q = norm.squared(s, s2);
-                    const double g2 = static_cast<double>(minus_gy[x]) * minus_gy[x], t2q = t2 * q;
-                    if (g2 > t2q * (1 + 1e-5)) {
-                      on[x] = 1;
-                    } else if (g2 >= t2q * (1 - 1e-5)) {
-                      on[x] = -(static_cast<float>(-minus_gy[x]) * (1.0f / std::sqrt(q))) > t;
-                    }
+                    on[x] = static_cast<std::uint8_t>(decided[x] == 1);
+                    any_tie |= decided[x] == 2;
+                  }
+                  if (!any_tie) return;
+                  // ... and near a tie as contrastNormalizedSobel computes gy (negated: exact in
+                  // floating point).
+                  for (int x = 0; x < r.width; ++x) {
+                    if (decided[x] == 2) on[x] = -(static_cast<float>(-minus_gy[x]) * norm(s[x], s2[x])) > t;
                   }
                 });
   return out;
@@ -334,37 +356,56 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   std::vector<int> scan_x;
   for (int x = edges.x0 + half; x < edges.x0 + edges.width - half; x += p.scan_step_px) scan_x.push_back(x);
   const int columns = static_cast<int>(scan_x.size());
-  // All scan lines together, row by row from the bottom up (the mask is row-major). The median
-  // of the 2·half+1 responses around a pixel exceeds the threshold when more than half of them
-  // do: `majority`, per row.
-  std::vector<int> run(columns, 0), found(columns, 0);
-  std::vector<Hit> column_hits(static_cast<std::size_t>(columns) * kMaxHits);
-  std::vector<std::uint8_t> majority(edges.width, 0);
-  int open = columns;
-  for (int y = edges.y0 + edges.height - 2; y > edges.y0 && open > 0; --y) {
-    const std::uint8_t* row = &edges.on[static_cast<std::size_t>(y - edges.y0) * edges.width];
+  // The median of the 2·half+1 responses around a pixel exceeds the threshold when more than
+  // half of them do: `majority`, row-major as the mask, on the scanned rows (all but the region's
+  // first and last) and zero elsewhere.
+  const int w = edges.width, m = p.silhouette_min_rows;
+  std::vector<std::uint8_t> majority(edges.on.size(), 0);
+  for (int r = 1; r + 1 < edges.height; ++r) {
+    const std::uint8_t* row = &edges.on[static_cast<std::size_t>(r) * w];
+    std::uint8_t* out_row = &majority[static_cast<std::size_t>(r) * w];
     if (half == 1) {
-      for (int x = 1; x + 1 < edges.width; ++x) majority[x] = row[x - 1] + row[x] + row[x + 1] >= 2;
+      for (int x = 1; x + 1 < w; ++x) out_row[x] = row[x - 1] + row[x] + row[x + 1] >= 2;
     } else {
       int on = 0;
       for (int x = 0; x < 2 * half; ++x) on += row[x];
-      for (int x = half; x + half < edges.width; ++x) {
+      for (int x = half; x + half < w; ++x) {
         on += row[x + half];
-        majority[x] = on > half;
+        out_row[x] = on > half;
         on -= row[x - half];
       }
     }
-    // First every scan line's run (branch-free), then the few where a run just got long enough.
-    bool any_edge = false;
-    for (int c = 0; c < columns; ++c) {
-      run[c] = (run[c] + 1) * majority[scan_x[c] - edges.x0];
-      any_edge |= run[c] == p.silhouette_min_rows;
+  }
+  // Scanning a line bottom-up, an edge is where the run of majority rows reaches m: rows r .. r+m-1
+  // on and the row below them off (or not scanned). All scan lines together, row by row.
+  std::vector<int> found(columns, 0);
+  std::vector<Hit> column_hits(static_cast<std::size_t>(columns) * kMaxHits);
+  std::vector<std::uint8_t> start(w);
+  int open = columns;
+  for (int r = edges.height - 1 - m; r >= 1 && open > 0; --r) {
+    const std::uint8_t* below = &majority[static_cast<std::size_t>(r + m) * w];
+    const std::uint8_t* first = &majority[static_cast<std::size_t>(r) * w];
+    if (m == 2) {
+      for (int x = 0; x < w; ++x) start[x] = first[x] & first[x + w] & (below[x] ^ 1);
+    } else {
+      for (int x = 0; x < w; ++x) {
+        std::uint8_t all = below[x] ^ 1;
+        for (int k = 0; k < m; ++k) all &= first[static_cast<std::size_t>(k) * w + x];
+        start[x] = all;
+      }
     }
-    if (!any_edge) continue;
-    for (int c = 0; c < columns; ++c) {
-      if (run[c] == p.silhouette_min_rows && found[c] < kMaxHits &&
-          (min_above_gray <= 0 || aboveGray(scan_x[c], y) >= min_above_gray)) {
-        column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y + p.silhouette_min_rows - 1};
+    // The few starts, eight bytes at a time past the empty stretches.
+    const int y = edges.y0 + r;
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, &start[x0], static_cast<std::size_t>(std::min(8, w - x0)));
+      if (word == 0) continue;
+      for (int x = x0; x < std::min(w, x0 + 8); ++x) {
+        if (!start[x] || (x - half) % p.scan_step_px != 0) continue;
+        const int c = (x - half) / p.scan_step_px;
+        if (c < 0 || c >= columns || found[c] == kMaxHits) continue;
+        if (min_above_gray > 0 && aboveGray(scan_x[c], y) < min_above_gray) continue;
+        column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y + m - 1};
         if (++found[c] == kMaxHits) --open;
       }
     }
@@ -454,7 +495,15 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
   }
   std::vector<float> usable, sides;
   boost_.classify(image, boxes, usable);
-  ori_.classify(image, boxes, sides);
+  // OriNet only on the regions OriBoostNet accepts (the others are not classified).
+  std::vector<cnn::PatchBox> accepted;
+  std::vector<int> accepted_index(out.regions.size(), -1);
+  for (std::size_t i = 0; i < out.regions.size(); ++i) {
+    if (usable[2 * i + 1] < params_.min_usable_confidence) continue;
+    accepted_index[i] = static_cast<int>(accepted.size());
+    accepted.push_back(boxes[i]);
+  }
+  if (!accepted.empty()) ori_.classify(image, accepted, sides);
   Eigen::Vector2d position = Eigen::Vector2d::Zero();
   if (robot.position_in_robot) {
     position = *robot.position_in_robot;
@@ -471,7 +520,7 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
     // OriNet: front, back, side facing the observer's left, side facing its right. The class is
     // decided over front / back / side (the two side classes summed); a side region's facing is
     // known only when one of its two classes clearly dominates.
-    const float* s = &sides[4 * i];
+    const float* s = &sides[4 * static_cast<std::size_t>(accepted_index[i])];
     const float side_sum = s[2] + s[3];
     const float scores[3] = {s[0], s[1], side_sum};
     const int best = static_cast<int>(std::max_element(scores, scores + 3) - scores);

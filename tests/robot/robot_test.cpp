@@ -355,7 +355,7 @@ TEST(Cns, EdgeMaskIsTheThresholdedVerticalResponse) {
   int on = 0, off = 0;
   for (const GrayImage* img : {&noise, &steps})
     for (const Region& g : {Region{5, 4, 20, 15, 2}, Region{0, 0, 48, 36, 2}, Region{-3, 20, 12, 20, 3},
-                            Region{30, -2, 25, 8, 1}, Region{10, 10, 7, 5, 0}})
+                            Region{30, -2, 25, 8, 1}, Region{10, 10, 7, 5, 0}, Region{2, 3, 40, 30, 6}})
       for (double sigma : {40.0, 5.0})
         for (double t : {0.0, 0.3, 0.5, 1.2}) {
           const CnsImage c = contrastNormalizedSobel(img->view(), g.x0, g.y0, g.w, g.h, g.r, sigma);
@@ -374,6 +374,7 @@ TEST(Cns, EdgeMaskIsTheThresholdedVerticalResponse) {
   EXPECT_GT(on, 1000);  // both answers are exercised
   EXPECT_GT(off, 1000);
   EXPECT_TRUE(brightAboveEdgeMask(noise.view(), 60, 0, 10, 10, 2, 40, 0.5).on.empty());  // outside the image
+  EXPECT_THROW(brightAboveEdgeMask(noise.view(), 0, 0, 10, 10, kMaxEdgeMaskRadiusPx + 1, 40, 0.5), Error);
 }
 
 RobotOrientationEstimator untrainedEstimator(

@@ -35,6 +35,8 @@ struct CnsEdgeMask {
   std::vector<std::uint8_t> on;
   bool at(int x, int y) const { return on[(y - y0) * width + (x - x0)] != 0; }
 };
+/// variance_radius_px at most kMaxEdgeMaskRadiusPx (the window's sums are 32-bit; Error above).
+constexpr int kMaxEdgeMaskRadiusPx = 6;
 CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width, int height,
                                 int variance_radius_px, double sigma_gray, double threshold);
 
@@ -44,7 +46,7 @@ struct RobotOrientationParams {
   double feet_region_below_fraction = 0.08;  ///< ... to this fraction below them
   int scan_step_px = 1;                      ///< between vertical scan lines
   int median_width_px = 3;                   ///< horizontal median filter over the CNS response
-  int variance_radius_px = 2;                ///< CNS local variance window radius
+  int variance_radius_px = 2;                ///< CNS local variance window radius (at most kMaxEdgeMaskRadiusPx)
   double cns_sigma_gray = 40;                ///< CNS noise floor
   double cns_threshold = 0.5;                ///< minus the vertical CNS (bright above dark) above this is the silhouette
   int silhouette_min_rows = 2;               ///< ... on this many rows in a row (noise answers on one)
