@@ -187,6 +187,21 @@ nlohmann::json robotsJson(const Frame& frame, const PipelineConfig& config) {
   return j;
 }
 
+// Every robot proposal with RobotNet's confidence (the detector's input: why a robot was missed).
+nlohmann::json robotProposalsJson(const Frame& frame) {
+  nlohmann::json j = nlohmann::json::array();
+  if (!frame.robot_proposals) return j;
+  for (std::size_t i = 0; i < frame.robot_proposals->size(); ++i) {
+    const auto& p = (*frame.robot_proposals)[i];
+    nlohmann::json o = {{"box_px", {p.box.x0, p.box.y0, p.box.x1, p.box.y1}}, {"feet_px", vec(p.feet_px)}};
+    if (frame.robot_net_confidences && i < frame.robot_net_confidences->size()) {
+      o["robot_net_confidence"] = (*frame.robot_net_confidences)[i];
+    }
+    j.push_back(o);
+  }
+  return j;
+}
+
 void printRobots(const Frame& frame) {
   std::printf("robot proposals: %zu, robots: %zu\n", frame.robot_proposals->size(), frame.robot_percepts->size());
   for (const auto& r : *frame.robot_percepts) {
@@ -360,6 +375,7 @@ void addDetectCommand(CLI::App& app, int& exit_code) {
     if (opt->json) {
       nlohmann::json j = toJson(frame, stats);
       j["robots"] = robotsJson(frame, config);
+      j["robot_proposals"] = robotProposalsJson(frame);
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       printText(opt->image, frame, stats);

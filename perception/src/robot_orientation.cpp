@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <Eigen/Eigenvalues>
 
 #include "colorfree/perception/cnn/shipped_nets.h"
@@ -18,7 +19,7 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.feet_region_below_fraction = f.getInRange("feet_region_below_fraction", 0, 1);
   p.scan_step_px = static_cast<int>(f.getInRange("scan_step_px", 1, 16));
   p.median_width_px = static_cast<int>(f.getInRange("median_width_px", 1, 9));
-  p.variance_radius_px = static_cast<int>(f.getInRange("variance_radius_px", 1, 8));
+  p.variance_radius_px = static_cast<int>(f.getInRange("variance_radius_px", 1, kMaxEdgeMaskRadiusPx));
   p.cns_sigma_gray = f.getInRange("cns_sigma_gray", 0.01, 255);
   p.cns_threshold = f.getInRange("cns_threshold", 0, 2);
   p.silhouette_min_rows = static_cast<int>(f.getInRange("silhouette_min_rows", 1, 8));
@@ -51,48 +52,55 @@ RobotOrientationParams RobotOrientationParams::loadDefault() {
   return load(defaultParamDir() + "/robot_orientation.yaml");
 }
 
-CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int width, int height,
-                                 int radius, double sigma) {
-  CnsImage out;
-  x0 = std::clamp(x0, 0, image.width);
-  y0 = std::clamp(y0, 0, image.height);
-  width = std::clamp(width, 0, image.width - x0);
-  height = std::clamp(height, 0, image.height - y0);
-  radius = std::max(radius, 0);
-  out.x0 = x0;
-  out.y0 = y0;
-  out.width = width;
-  out.height = height;
-  out.gx.assign(static_cast<std::size_t>(width) * height, 0.0f);
-  out.gy.assign(out.gx.size(), 0.0f);
-  if (width == 0 || height == 0) return out;
+namespace {
+// A region of the image clamped to it.
+struct ClampedRegion {
+  int x0, y0, width, height;
+};
+ClampedRegion clampRegion(const GrayView& image, int x0, int y0, int width, int height) {
+  ClampedRegion r;
+  r.x0 = std::clamp(x0, 0, image.width);
+  r.y0 = std::clamp(y0, 0, image.height);
+  r.width = std::clamp(width, 0, image.width - r.x0);
+  r.height = std::clamp(height, 0, image.height - r.y0);
+  return r;
+}
+
+// The CNS's rows of a (non-empty) region: calls row(y, up, mid, down, vs, vs2) for each row y
+// (relative to the region), with up / mid / down the image rows y-1, y, y+1 from the region's
+// column 0 (reads clamped to the image, valid from column -1 to width) and vs, vs2 the sums of the
+// values and their squares over the variance window's 2·radius+1 rows per column (valid from
+// column -radius to width-1+radius).
+template <typename RowFn>
+void forEachCnsRow(const GrayView& image, const ClampedRegion& r, int radius, RowFn&& row_fn) {
   // The region grown by a border (the variance window's radius, at least the Sobel's 1 px),
-  // copied once with reads clamped to the image: the loops below read it without any checks.
+  // copied once with reads clamped to the image: the loops read it without any checks.
   const int border = std::max(radius, 1);
-  const int pw = width + 2 * border, ph = height + 2 * border;
+  const int pw = r.width + 2 * border, ph = r.height + 2 * border;
   std::vector<std::int32_t> pix(static_cast<std::size_t>(pw) * ph);
   std::vector<int> col(pw);
-  for (int i = 0; i < pw; ++i) col[i] = std::clamp(x0 - border + i, 0, image.width - 1);
+  for (int i = 0; i < pw; ++i) col[i] = std::clamp(r.x0 - border + i, 0, image.width - 1);
+  // Columns i_lo .. i_hi-1 need no clamping: a plain widening copy.
+  const int i_lo = std::min(pw, std::max(0, border - r.x0));
+  const int i_hi = std::max(i_lo, std::min(pw, image.width - r.x0 + border));
   for (int j = 0; j < ph; ++j) {
-    const std::uint8_t* src = image.row(std::clamp(y0 - border + j, 0, image.height - 1));
+    const std::uint8_t* src = image.row(std::clamp(r.y0 - border + j, 0, image.height - 1));
     std::int32_t* dst = &pix[static_cast<std::size_t>(j) * pw];
-    for (int i = 0; i < pw; ++i) dst[i] = src[col[i]];
+    for (int i = 0; i < i_lo; ++i) dst[i] = src[col[i]];
+    const std::uint8_t* run = src + (r.x0 - border);
+    for (int i = i_lo; i < i_hi; ++i) dst[i] = run[i];
+    for (int i = i_hi; i < pw; ++i) dst[i] = src[col[i]];
   }
-  const int side = 2 * radius + 1;
-  const std::int64_t n = static_cast<std::int64_t>(side) * side;
-  const float inv_n2 = 1.0f / static_cast<float>(n * n);
-  const float sigma2 = static_cast<float>(sigma * sigma);
-  // Vertical sums of the values and their squares over the window's rows, per padded column,
-  // slid down row by row; the horizontal sum slides along each row.
+  // The vertical sums per padded column, slid down row by row.
   std::vector<std::int32_t> vs(pw, 0), vs2(pw, 0);
   for (int j = border - radius; j <= border + radius; ++j) {
-    const std::int32_t* r = &pix[static_cast<std::size_t>(j) * pw];
+    const std::int32_t* row = &pix[static_cast<std::size_t>(j) * pw];
     for (int i = 0; i < pw; ++i) {
-      vs[i] += r[i];
-      vs2[i] += r[i] * r[i];
+      vs[i] += row[i];
+      vs2[i] += row[i] * row[i];
     }
   }
-  for (int y = 0; y < height; ++y) {
+  for (int y = 0; y < r.height; ++y) {
     if (y > 0) {
       const std::int32_t* gone = &pix[static_cast<std::size_t>(y - 1 + border - radius) * pw];
       const std::int32_t* come = &pix[static_cast<std::size_t>(y + border + radius) * pw];
@@ -102,29 +110,135 @@ CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int widt
       }
     }
     const std::int32_t* up = &pix[static_cast<std::size_t>(y + border - 1) * pw + border];
-    const std::int32_t* mid = up + pw;
-    const std::int32_t* down = mid + pw;
-    float* ogx = &out.gx[static_cast<std::size_t>(y) * width];
-    float* ogy = &out.gy[static_cast<std::size_t>(y) * width];
-    std::int64_t s = 0, s2 = 0;
-    for (int i = border - radius; i < border + radius; ++i) {
-      s += vs[i];
-      s2 += vs2[i];
-    }
-    for (int x = 0; x < width; ++x) {
-      s += vs[x + border + radius];
-      s2 += vs2[x + border + radius];
-      const int gx = (up[x + 1] + 2 * mid[x + 1] + down[x + 1]) - (up[x - 1] + 2 * mid[x - 1] + down[x - 1]);
-      const int gy = (down[x - 1] + 2 * down[x] + down[x + 1]) - (up[x - 1] + 2 * up[x] + up[x + 1]);
-      // n² · variance, exact in integers.
-      const std::int64_t var_n2 = std::max<std::int64_t>(0, n * s2 - s * s);
-      const float inv_norm = 1.0f / std::sqrt(64.0f * static_cast<float>(var_n2) * inv_n2 + sigma2);
-      ogx[x] = static_cast<float>(gx) * inv_norm;
-      ogy[x] = static_cast<float>(gy) * inv_norm;
-      s -= vs[x + border - radius];
-      s2 -= vs2[x + border - radius];
-    }
+    row_fn(y, up, up + pw, up + 2 * pw, vs.data() + border, vs2.data() + border);
   }
+}
+
+// 1 / sqrt(64 · variance + σ²) from a window's sums (n pixels).
+struct CnsNormalizer {
+  std::int64_t n;
+  float inv_n2, sigma2;
+  CnsNormalizer(int radius, double sigma)
+      : n(static_cast<std::int64_t>(2 * radius + 1) * (2 * radius + 1)),
+        inv_n2(1.0f / static_cast<float>(n * n)),
+        sigma2(static_cast<float>(sigma * sigma)) {}
+  // 64 · variance + σ², the normalizer's square.
+  float squared(std::int64_t s, std::int64_t s2) const {
+    // n² · variance, exact in integers.
+    const std::int64_t var_n2 = std::max<std::int64_t>(0, n * s2 - s * s);
+    return 64.0f * static_cast<float>(var_n2) * inv_n2 + sigma2;
+  }
+  float operator()(std::int64_t s, std::int64_t s2) const { return 1.0f / std::sqrt(squared(s, s2)); }
+};
+
+int sobelX(const std::int32_t* up, const std::int32_t* mid, const std::int32_t* down) {
+  return (up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]);
+}
+int sobelY(const std::int32_t* up, const std::int32_t* down) {
+  return (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1]);
+}
+}  // namespace
+
+CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int width, int height,
+                                 int radius, double sigma) {
+  const ClampedRegion r = clampRegion(image, x0, y0, width, height);
+  CnsImage out;
+  out.x0 = r.x0;
+  out.y0 = r.y0;
+  out.width = r.width;
+  out.height = r.height;
+  out.gx.assign(static_cast<std::size_t>(r.width) * r.height, 0.0f);
+  out.gy.assign(out.gx.size(), 0.0f);
+  if (r.width == 0 || r.height == 0) return out;
+  radius = std::max(radius, 0);
+  const CnsNormalizer norm(radius, sigma);
+  forEachCnsRow(image, r, radius,
+                [&](int y, const std::int32_t* up, const std::int32_t* mid, const std::int32_t* down,
+                    const std::int32_t* vs, const std::int32_t* vs2) {
+                  float* gx = &out.gx[static_cast<std::size_t>(y) * r.width];
+                  float* gy = &out.gy[static_cast<std::size_t>(y) * r.width];
+                  // The horizontal sums slide along the row.
+                  std::int64_t s = 0, s2 = 0;
+                  for (int i = -radius; i < radius; ++i) {
+                    s += vs[i];
+                    s2 += vs2[i];
+                  }
+                  for (int x = 0; x < r.width; ++x) {
+                    s += vs[x + radius];
+                    s2 += vs2[x + radius];
+                    const float inv_norm = norm(s, s2);
+                    gx[x] = static_cast<float>(sobelX(up + x, mid + x, down + x)) * inv_norm;
+                    gy[x] = static_cast<float>(sobelY(up + x, down + x)) * inv_norm;
+                    s -= vs[x - radius];
+                    s2 -= vs2[x - radius];
+                  }
+                });
+  return out;
+}
+
+CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width, int height,
+                                int radius, double sigma, double threshold) {
+  const ClampedRegion r = clampRegion(image, x0, y0, width, height);
+  CnsEdgeMask out;
+  out.x0 = r.x0;
+  out.y0 = r.y0;
+  out.width = r.width;
+  out.height = r.height;
+  out.on.assign(static_cast<std::size_t>(r.width) * r.height, 0);
+  if (r.width == 0 || r.height == 0) return out;
+  radius = std::max(radius, 0);
+  if (radius > kMaxEdgeMaskRadiusPx) {
+    throw Error("brightAboveEdgeMask: variance radius " + std::to_string(radius) + " px is above " +
+                std::to_string(kMaxEdgeMaskRadiusPx) + " (the window's sums must fit 32 bits)");
+  }
+  const CnsNormalizer norm(radius, sigma);
+  const auto n = static_cast<std::int32_t>(norm.n);
+  const float t = static_cast<float>(threshold);
+  const float t2 = t * t;
+  std::vector<std::int32_t> minus_gy(r.width), s(r.width), s2(r.width);
+  std::vector<std::int32_t> decided(r.width);
+  forEachCnsRow(image, r, radius,
+                [&](int y, const std::int32_t* up, const std::int32_t*, const std::int32_t* down,
+                    const std::int32_t* vs, const std::int32_t* vs2) {
+                  // Loops the compiler vectorises: the Sobel, the window sums, the decision.
+                  for (int x = 0; x < r.width; ++x) minus_gy[x] = -sobelY(up + x, down + x);
+                  std::fill(s.begin(), s.end(), 0);
+                  std::fill(s2.begin(), s2.end(), 0);
+                  for (int i = -radius; i <= radius; ++i) {
+                    for (int x = 0; x < r.width; ++x) {
+                      s[x] += vs[x + i];
+                      s2[x] += vs2[x + i];
+                    }
+                  }
+                  std::uint8_t* on = &out.on[static_cast<std::size_t>(y) * r.width];
+                  // Locals, so that the stores below alias none of the loop's inputs.
+                  const int width = r.width;
+                  const std::int32_t nn = n, *ps = s.data(), *ps2 = s2.data(), *pg = minus_gy.data();
+                  const float inv_n2 = norm.inv_n2, sigma2 = norm.sigma2, tt2 = t2;
+                  std::int32_t* pd = decided.data();
+                  for (int x = 0; x < width; ++x) {
+                    // (-gy) / sqrt(q) > t on the squares (the float q as CnsNormalizer::squared
+                    // gives it; the squared Sobel is exact in a float) ...
+                    const std::int32_t var_n2 = std::max(0, nn * ps2[x] - ps[x] * ps[x]);
+                    const float q = 64.0f * static_cast<float>(var_n2) * inv_n2 + sigma2;
+                    const float g = static_cast<float>(std::max(pg[x], 0));
+                    const float g2 = g * g, t2q = tt2 * q;
+                    const auto above = static_cast<std::int32_t>(g2 > t2q * (1 + 1e-5f));
+                    const auto near = static_cast<std::int32_t>(g2 >= t2q * (1 - 1e-5f));
+                    pd[x] = static_cast<std::int32_t>(pg[x] > 0) * (above + 2 * (near - above));  // 1 on, 2 a tie
+                  }
+                  bool any_tie = false;
+                  for (int x = 0; x < r.width; ++x) {
+                    on[x] = static_cast<std::uint8_t>(decided[x] == 1);
+                    any_tie |= decided[x] == 2;
+                  }
+                  if (!any_tie) return;
+                  // ... and near a tie as contrastNormalizedSobel computes gy (negated: exact in
+                  // floating point).
+                  for (int x = 0; x < r.width; ++x) {
+                    if (decided[x] == 2) on[x] = -(static_cast<float>(-minus_gy[x]) * norm(s[x], s2[x])) > t;
+                  }
+                });
   return out;
 }
 
@@ -197,13 +311,11 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   const int y_bottom = static_cast<int>(std::ceil(robot.feet_px.y() + p.feet_region_below_fraction * h));
   const int x_left = static_cast<int>(std::floor(robot.box.x0));
   const int x_right = static_cast<int>(std::ceil(robot.box.x1));
-  const CnsImage cns = contrastNormalizedSobel(image, x_left, y_top, x_right - x_left,
-                                               y_bottom - y_top, p.variance_radius_px,
-                                               p.cns_sigma_gray);
-  if (cns.width < 3 || cns.height < 3) return out;
+  const CnsEdgeMask edges = brightAboveEdgeMask(image, x_left, y_top, x_right - x_left,
+                                                y_bottom - y_top, p.variance_radius_px,
+                                                p.cns_sigma_gray, p.cns_threshold);
+  if (edges.width < 3 || edges.height < 3) return out;
   const int half = p.median_width_px / 2;
-  float window[9];
-  const float threshold = static_cast<float>(p.cns_threshold);
   // Per scan line, the edges from the bottom up (the lowest row of each run of rows above the
   // threshold; a real edge answers on several rows, noise on one), at most kMaxHits.
   constexpr int kMaxHits = 4;
@@ -219,16 +331,16 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   double min_above_gray = 0;
   if (p.silhouette_min_above_carpet_ratio > 0) {
     std::vector<std::uint8_t> outer;
-    const int strip = std::max(2, cns.width / 16);
+    const int strip = std::max(2, edges.width / 16);
     std::vector<int> columns_beside;
     for (int i = 1; i <= strip; ++i) {
-      const int left = cns.x0 - i >= 0 ? cns.x0 - i : cns.x0 + i - 1;
-      const int right = cns.x0 + cns.width - 1 + i < image.width ? cns.x0 + cns.width - 1 + i
-                                                                   : cns.x0 + cns.width - i;
+      const int left = edges.x0 - i >= 0 ? edges.x0 - i : edges.x0 + i - 1;
+      const int right = edges.x0 + edges.width - 1 + i < image.width ? edges.x0 + edges.width - 1 + i
+                                                                       : edges.x0 + edges.width - i;
       columns_beside.push_back(left);
       columns_beside.push_back(right);
     }
-    for (int y = cns.y0; y < cns.y0 + cns.height; ++y) {
+    for (int y = edges.y0; y < edges.y0 + edges.height; ++y) {
       const std::uint8_t* row = image.row(y);
       for (int x : columns_beside) outer.push_back(row[x]);
     }
@@ -241,29 +353,66 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     for (int y = y_edge - 1; y >= y_edge - p.silhouette_above_rows_px && y >= 0; --y, ++n) sum += image.row(y)[x];
     return n > 0 ? static_cast<double>(sum) / n : 0.0;
   };
-  int columns = 0;
-  for (int x = cns.x0 + half; x < cns.x0 + cns.width - half; x += p.scan_step_px, ++columns) {
-    first_hit.push_back(static_cast<int>(hits.size()));
-    int run = 0, found = 0;
-    for (int y = cns.y0 + cns.height - 2; y > cns.y0 && found < kMaxHits; --y) {
-      // Bright feet above the darker carpet: the vertical response is negative there.
-      const float* g = &cns.gy[static_cast<std::size_t>(y - cns.y0) * cns.width + (x - cns.x0)];
-      float median;
-      if (half == 1) {
-        const float a = -g[-1], b = -g[0], c = -g[1];
-        median = std::max(std::min(a, b), std::min(std::max(a, b), c));
-      } else {
-        int n = 0;
-        for (int dx = -half; dx <= half; ++dx) window[n++] = -g[dx];
-        std::nth_element(window, window + n / 2, window + n);
-        median = window[n / 2];
-      }
-      run = median > threshold ? run + 1 : 0;
-      if (run == p.silhouette_min_rows && (min_above_gray <= 0 || aboveGray(x, y) >= min_above_gray)) {
-        hits.push_back({columns, y + p.silhouette_min_rows - 1});
-        ++found;
+  std::vector<int> scan_x;
+  for (int x = edges.x0 + half; x < edges.x0 + edges.width - half; x += p.scan_step_px) scan_x.push_back(x);
+  const int columns = static_cast<int>(scan_x.size());
+  // The median of the 2·half+1 responses around a pixel exceeds the threshold when more than
+  // half of them do: `majority`, row-major as the mask, on the scanned rows (all but the region's
+  // first and last) and zero elsewhere.
+  const int w = edges.width, m = p.silhouette_min_rows;
+  std::vector<std::uint8_t> majority(edges.on.size(), 0);
+  for (int r = 1; r + 1 < edges.height; ++r) {
+    const std::uint8_t* row = &edges.on[static_cast<std::size_t>(r) * w];
+    std::uint8_t* out_row = &majority[static_cast<std::size_t>(r) * w];
+    if (half == 1) {
+      for (int x = 1; x + 1 < w; ++x) out_row[x] = row[x - 1] + row[x] + row[x + 1] >= 2;
+    } else {
+      int on = 0;
+      for (int x = 0; x < 2 * half; ++x) on += row[x];
+      for (int x = half; x + half < w; ++x) {
+        on += row[x + half];
+        out_row[x] = on > half;
+        on -= row[x - half];
       }
     }
+  }
+  // Scanning a line bottom-up, an edge is where the run of majority rows reaches m: rows r .. r+m-1
+  // on and the row below them off (or not scanned). All scan lines together, row by row.
+  std::vector<int> found(columns, 0);
+  std::vector<Hit> column_hits(static_cast<std::size_t>(columns) * kMaxHits);
+  std::vector<std::uint8_t> start(w);
+  int open = columns;
+  for (int r = edges.height - 1 - m; r >= 1 && open > 0; --r) {
+    const std::uint8_t* below = &majority[static_cast<std::size_t>(r + m) * w];
+    const std::uint8_t* first = &majority[static_cast<std::size_t>(r) * w];
+    if (m == 2) {
+      for (int x = 0; x < w; ++x) start[x] = first[x] & first[x + w] & (below[x] ^ 1);
+    } else {
+      for (int x = 0; x < w; ++x) {
+        std::uint8_t all = below[x] ^ 1;
+        for (int k = 0; k < m; ++k) all &= first[static_cast<std::size_t>(k) * w + x];
+        start[x] = all;
+      }
+    }
+    // The few starts, eight bytes at a time past the empty stretches.
+    const int y = edges.y0 + r;
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, &start[x0], static_cast<std::size_t>(std::min(8, w - x0)));
+      if (word == 0) continue;
+      for (int x = x0; x < std::min(w, x0 + 8); ++x) {
+        if (!start[x] || (x - half) % p.scan_step_px != 0) continue;
+        const int c = (x - half) / p.scan_step_px;
+        if (c < 0 || c >= columns || found[c] == kMaxHits) continue;
+        if (min_above_gray > 0 && aboveGray(scan_x[c], y) < min_above_gray) continue;
+        column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y + m - 1};
+        if (++found[c] == kMaxHits) --open;
+      }
+    }
+  }
+  for (int c = 0; c < columns; ++c) {
+    first_hit.push_back(static_cast<int>(hits.size()));
+    for (int k = 0; k < found[c]; ++k) hits.push_back(column_hits[static_cast<std::size_t>(c) * kMaxHits + k]);
   }
   first_hit.push_back(static_cast<int>(hits.size()));
   // Chains: hits on neighbouring scan lines within a few rows. The feet's edges make long chains,
@@ -289,7 +438,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   for (int c = 0; c < columns; ++c) {
     for (int i = first_hit[c]; i < first_hit[c + 1]; ++i) {
       if (chain_columns[root(i)] < min_chain) continue;
-      const Eigen::Vector2d pt(cns.x0 + half + static_cast<double>(c) * p.scan_step_px + 0.5, hits[i].row + 0.5);
+      const Eigen::Vector2d pt(scan_x[c] + 0.5, hits[i].row + 0.5);
       if (const auto g = camera.pixelToGround(pt)) {
         out.silhouette_px.push_back(pt);
         out.silhouette_in_robot.push_back(*g);
@@ -346,7 +495,15 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
   }
   std::vector<float> usable, sides;
   boost_.classify(image, boxes, usable);
-  ori_.classify(image, boxes, sides);
+  // OriNet only on the regions OriBoostNet accepts (the others are not classified).
+  std::vector<cnn::PatchBox> accepted;
+  std::vector<int> accepted_index(out.regions.size(), -1);
+  for (std::size_t i = 0; i < out.regions.size(); ++i) {
+    if (usable[2 * i + 1] < params_.min_usable_confidence) continue;
+    accepted_index[i] = static_cast<int>(accepted.size());
+    accepted.push_back(boxes[i]);
+  }
+  if (!accepted.empty()) ori_.classify(image, accepted, sides);
   Eigen::Vector2d position = Eigen::Vector2d::Zero();
   if (robot.position_in_robot) {
     position = *robot.position_in_robot;
@@ -363,7 +520,7 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
     // OriNet: front, back, side facing the observer's left, side facing its right. The class is
     // decided over front / back / side (the two side classes summed); a side region's facing is
     // known only when one of its two classes clearly dominates.
-    const float* s = &sides[4 * i];
+    const float* s = &sides[4 * static_cast<std::size_t>(accepted_index[i])];
     const float side_sum = s[2] + s[3];
     const float scores[3] = {s[0], s[1], side_sum};
     const int best = static_cast<int>(std::max_element(scores, scores + 3) - scores);

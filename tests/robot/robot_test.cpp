@@ -339,6 +339,44 @@ TEST(Cns, MatchesTheDefinitionInsideAndAtTheImageBorder) {
   }
 }
 
+TEST(Cns, EdgeMaskIsTheThresholdedVerticalResponse) {
+  // Random pixels (every response) and a smooth ramp with steps (many near the threshold).
+  GrayImage noise(48, 36), steps(48, 36);
+  std::mt19937_64 rng(5);
+  std::uniform_int_distribution<int> v(0, 255), d(-6, 6);
+  for (int y = 0; y < 36; ++y)
+    for (int x = 0; x < 48; ++x) {
+      noise.at(x, y) = static_cast<std::uint8_t>(v(rng));
+      steps.at(x, y) = static_cast<std::uint8_t>(std::clamp(60 + (y / 5) * 18 - (y % 5) * 3 + d(rng), 0, 255));
+    }
+  struct Region {
+    int x0, y0, w, h, r;
+  };
+  int on = 0, off = 0;
+  for (const GrayImage* img : {&noise, &steps})
+    for (const Region& g : {Region{5, 4, 20, 15, 2}, Region{0, 0, 48, 36, 2}, Region{-3, 20, 12, 20, 3},
+                            Region{30, -2, 25, 8, 1}, Region{10, 10, 7, 5, 0}, Region{2, 3, 40, 30, 6}})
+      for (double sigma : {40.0, 5.0})
+        for (double t : {0.0, 0.3, 0.5, 1.2}) {
+          const CnsImage c = contrastNormalizedSobel(img->view(), g.x0, g.y0, g.w, g.h, g.r, sigma);
+          const CnsEdgeMask m = brightAboveEdgeMask(img->view(), g.x0, g.y0, g.w, g.h, g.r, sigma, t);
+          ASSERT_EQ(m.x0, c.x0);
+          ASSERT_EQ(m.y0, c.y0);
+          ASSERT_EQ(m.width, c.width);
+          ASSERT_EQ(m.height, c.height);
+          for (int y = c.y0; y < c.y0 + c.height; ++y)
+            for (int x = c.x0; x < c.x0 + c.width; ++x) {
+              const bool want = -c.gyAt(x, y) > static_cast<float>(t);
+              ASSERT_EQ(m.at(x, y), want) << x << "," << y << " r=" << g.r << " sigma=" << sigma << " t=" << t;
+              ++(want ? on : off);
+            }
+        }
+  EXPECT_GT(on, 1000);  // both answers are exercised
+  EXPECT_GT(off, 1000);
+  EXPECT_TRUE(brightAboveEdgeMask(noise.view(), 60, 0, 10, 10, 2, 40, 0.5).on.empty());  // outside the image
+  EXPECT_THROW(brightAboveEdgeMask(noise.view(), 0, 0, 10, 10, kMaxEdgeMaskRadiusPx + 1, 40, 0.5), Error);
+}
+
 RobotOrientationEstimator untrainedEstimator(
     const RobotOrientationParams& params = RobotOrientationParams::loadDefault()) {
   auto net = [](int i) {

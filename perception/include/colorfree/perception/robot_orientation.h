@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,13 +26,27 @@ struct CnsImage {
 CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int width, int height,
                                  int variance_radius_px, double sigma_gray);
 
+/// The lower silhouette's edge pixels of a region: 1 where minus the CNS's gy exceeds
+/// `threshold` (brighter above than below), else 0; row-major, the region clamped to the image as
+/// for CnsImage. The same answers as thresholding contrastNormalizedSobel's -gy, with no gx and no
+/// normalizer where the Sobel alone is too weak to pass (the normalizer is never above 1/σ).
+struct CnsEdgeMask {
+  int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the region in image pixels
+  std::vector<std::uint8_t> on;
+  bool at(int x, int y) const { return on[(y - y0) * width + (x - x0)] != 0; }
+};
+/// variance_radius_px at most kMaxEdgeMaskRadiusPx (the window's sums are 32-bit; Error above).
+constexpr int kMaxEdgeMaskRadiusPx = 6;
+CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width, int height,
+                                int variance_radius_px, double sigma_gray, double threshold);
+
 /// Parameters of the orientation stage (perception/params/robot_orientation.yaml).
 struct RobotOrientationParams {
   double feet_region_above_fraction = 0.22;  ///< feet region: from this fraction of the box height above the feet ...
   double feet_region_below_fraction = 0.08;  ///< ... to this fraction below them
   int scan_step_px = 1;                      ///< between vertical scan lines
   int median_width_px = 3;                   ///< horizontal median filter over the CNS response
-  int variance_radius_px = 2;                ///< CNS local variance window radius
+  int variance_radius_px = 2;                ///< CNS local variance window radius (at most kMaxEdgeMaskRadiusPx)
   double cns_sigma_gray = 40;                ///< CNS noise floor
   double cns_threshold = 0.5;                ///< minus the vertical CNS (bright above dark) above this is the silhouette
   int silhouette_min_rows = 2;               ///< ... on this many rows in a row (noise answers on one)
