@@ -26,6 +26,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
   p.min_width_fraction = f.getInRange("min_width_fraction", 0, 10);
   p.split_width_factor = f.getInRange("split_width_factor", 1, 10);
+  p.defer_width_factor = f.getInRange("defer_width_factor", 1, 100);
   p.box_width_factor = f.getInRange("box_width_factor", 0.1, 10);
   p.box_height_factor = f.getInRange("box_height_factor", 0.1, 10);
   p.box_below_feet_fraction = f.getInRange("box_below_feet_fraction", 0, 1);
@@ -114,6 +115,11 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         r = r_top - 1;
         if (y_hi - y_lo < 2) continue;
         double carpet = image.at(x, y_hi);
+        // A stretch starting at the lower edge of the image (or of the own body) starts on
+        // whatever is there: its "carpet" may be an object (the ball cut by the border, its lit
+        // black patches), against which the real carpet above would count as a robot's legs in
+        // shade. There only pixels brighter than the reference fill a robot's run.
+        const bool carpet_unknown = y_hi == bottom - 1;
         // The reference the robot must be brighter than: the running carpet luminance, but after
         // a darker stretch (a shadow, the ball's black patches) it falls back to it only by
         // carpet_dark_decay per row, so the carpet after a short dark stretch is no robot.
@@ -153,7 +159,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           int run_top = y, gap = 0, filled = 0;
           for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
             const double d = image.at(x, yy);
-            if (d - ref > thr || carpet - d > thr) {
+            if (d - ref > thr || (!carpet_unknown && carpet - d > thr)) {
               ++filled;
               run_top = yy;
               gap = 0;
@@ -224,6 +230,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   struct Candidate {
     RobotProposal proposal;
     double expected_h;
+    bool wide_group;  ///< from a group wider than defer_width_factor robots: deferred under the cap
   };
   std::vector<Candidate> candidates;
   for (Group& g : groups) {
@@ -250,7 +257,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
       rp.box.x1 = x + bw / 2;
       rp.box.y1 = feet_y + p.box_below_feet_fraction * *h;
       rp.box.y0 = rp.box.y1 - p.box_height_factor * *h;
-      candidates.push_back({rp, *h});
+      candidates.push_back({rp, *h, w > p.defer_width_factor * w_expected});
     }
   }
   // Lower in the image first (nearer robots hide the ones behind).
@@ -277,7 +284,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     }
     return result;
   };
-  std::vector<const Candidate*> behind;
+  std::vector<const Candidate*> behind, wide;
   const auto keep = [&](const Candidate& c, bool may_defer) {
     const Fit f = fit(c);
     if (f == Fit::kBehind && may_defer) {
@@ -293,8 +300,16 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     }
     out.proposals.push_back(c.proposal);
   };
-  for (const Candidate& c : candidates) keep(c, true);
+  // Free-standing candidates, then those behind a nearer one, then the boxes of wide groups.
+  for (const Candidate& c : candidates) {
+    if (c.wide_group) {
+      wide.push_back(&c);
+    } else {
+      keep(c, true);
+    }
+  }
   for (const Candidate* c : behind) keep(*c, false);
+  for (const Candidate* c : wide) keep(*c, false);
   return out;
 }
 

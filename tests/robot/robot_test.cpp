@@ -184,6 +184,38 @@ TEST(RobotProposer, BallCutByTheLowerBorderHidesNoRobotBehindIt) {
   for (const RobotProposal& p : out.proposals) EXPECT_LT(p.feet_px.y(), 420) << describe(out);
 }
 
+TEST(RobotProposer, BoxesOfAWideGroupComeAfterAFarRobotUnderTheCap) {
+  // A bright band wider than several robots lower in the image (the wall above a far field line
+  // gives such rows of boxes) must not take the only place under the cap from a farther robot.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(12);
+  const Eigen::Vector2d far_feet = drawRobot(img, cam, {5.0, -1.0});
+  const Eigen::Vector2d band_feet = *cam.robotToPixel({3.5, 0.6, 0});
+  const double band_h = *cam.robotHeightPx(band_feet, 0.574);
+  const double band_w = band_h * 0.311 / 0.574;
+  ASSERT_GT(band_feet.y(), far_feet.y() + 5);
+  ASSERT_GT(far_feet.x(), band_feet.x() + 3 * band_w);  // the band stays clear of the far robot
+  cv::Mat m = wrap(img);
+  cv::rectangle(m, cv::Point(int(band_feet.x() - 3 * band_w), int(band_feet.y() - 0.6 * band_h)),
+                cv::Point(int(band_feet.x() + 2 * band_w), int(band_feet.y()) - 1), cv::Scalar(200),
+                cv::FILLED);
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
+  const RobotProposer proposer(params, FieldDimensions::loadDefault());
+  const RobotProposals uncapped = proposer.run(img.view(), cam, all, regions, true);
+  ASSERT_GE(uncapped.proposals.size(), 3u) << describe(uncapped);  // the band's boxes and the robot
+  params.max_proposals = 1;
+  const RobotProposals capped =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  const double h = *cam.robotHeightPx(far_feet, 0.574);
+  EXPECT_TRUE(proposedAt(capped, far_feet, h)) << "far feet " << far_feet.transpose() << describe(capped);
+  params.defer_width_factor = 100;  // no deferral: the lower band takes the place
+  const RobotProposals undeferred =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  EXPECT_FALSE(proposedAt(undeferred, far_feet, h)) << describe(undeferred);
+}
+
 TEST(RobotProposer, FarRobotInTheUpperPartOfANearerBoxIsKept) {
   // A far robot beside a near one, its feet inside the near robot's box but high above the near
   // robot's feet (a knee or hand is no higher than half the robot).

@@ -48,6 +48,10 @@ struct RobotProposerParams {
   double min_width_fraction = 0.2;
   /// A group wider than this many expected widths is split into robots side by side.
   double split_width_factor = 1.7;
+  /// The boxes of a group wider than this many expected widths (a far field line, the field's
+  /// edge against the wall: rows of boxes, rarely robots) come after every other candidate under
+  /// the cap, so they do not take the places of far robots.
+  double defer_width_factor = 2.5;
   double box_width_factor = 1.25;   ///< proposed box width in expected robot widths
   double box_height_factor = 1.08;  ///< proposed box height in expected robot heights
   double box_below_feet_fraction = 0.04;  ///< box bottom below the feet, in expected heights
