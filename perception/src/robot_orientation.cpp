@@ -53,12 +53,8 @@ RobotOrientationParams RobotOrientationParams::loadDefault() {
 }
 
 namespace {
-// A region of the image clamped to it.
-struct ClampedRegion {
-  int x0, y0, width, height;
-};
-ClampedRegion clampRegion(const GrayView& image, int x0, int y0, int width, int height) {
-  ClampedRegion r;
+CnsRegion clampRegion(const GrayView& image, int x0, int y0, int width, int height) {
+  CnsRegion r;
   r.x0 = std::clamp(x0, 0, image.width);
   r.y0 = std::clamp(y0, 0, image.height);
   r.width = std::clamp(width, 0, image.width - r.x0);
@@ -72,7 +68,7 @@ ClampedRegion clampRegion(const GrayView& image, int x0, int y0, int width, int 
 // values and their squares over the variance window's 2·radius+1 rows per column (valid from
 // column -radius to width-1+radius).
 template <typename RowFn>
-void forEachCnsRow(const GrayView& image, const ClampedRegion& r, int radius, RowFn&& row_fn) {
+void forEachCnsRow(const GrayView& image, const CnsRegion& r, int radius, RowFn&& row_fn) {
   // The region grown by a border (the variance window's radius, at least the Sobel's 1 px),
   // copied once with reads clamped to the image: the loops read it without any checks.
   const int border = std::max(radius, 1);
@@ -141,12 +137,9 @@ int sobelY(const std::int32_t* up, const std::int32_t* down) {
 
 CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int width, int height,
                                  int radius, double sigma) {
-  const ClampedRegion r = clampRegion(image, x0, y0, width, height);
+  const CnsRegion r = clampRegion(image, x0, y0, width, height);
   CnsImage out;
-  out.x0 = r.x0;
-  out.y0 = r.y0;
-  out.width = r.width;
-  out.height = r.height;
+  static_cast<CnsRegion&>(out) = r;
   out.gx.assign(static_cast<std::size_t>(r.width) * r.height, 0.0f);
   out.gy.assign(out.gx.size(), 0.0f);
   if (r.width == 0 || r.height == 0) return out;
@@ -178,12 +171,9 @@ CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int widt
 
 CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width, int height,
                                 int radius, double sigma, double threshold) {
-  const ClampedRegion r = clampRegion(image, x0, y0, width, height);
+  const CnsRegion r = clampRegion(image, x0, y0, width, height);
   CnsEdgeMask out;
-  out.x0 = r.x0;
-  out.y0 = r.y0;
-  out.width = r.width;
-  out.height = r.height;
+  static_cast<CnsRegion&>(out) = r;
   out.on.assign(static_cast<std::size_t>(r.width) * r.height, 0);
   if (r.width == 0 || r.height == 0) return out;
   radius = std::max(radius, 0);

@@ -18,8 +18,11 @@ namespace colorfree {
 /// Contrast-normalized Sobel of a region: each pixel's Sobel gradient divided by
 /// sqrt(64 · local variance + σ²) over a (2·radius+1)² window, so a clean step edge answers about
 /// 1 whatever its contrast and the lighting. Row-major, region size; gx right, gy down.
-struct CnsImage {
-  int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the region in image pixels
+/// A region of the image, clamped to it (pixels).
+struct CnsRegion {
+  int x0 = 0, y0 = 0, width = 0, height = 0;
+};
+struct CnsImage : CnsRegion {
   std::vector<float> gx, gy;
   float gyAt(int x, int y) const { return gy[(y - y0) * width + (x - x0)]; }
 };
@@ -30,8 +33,7 @@ CnsImage contrastNormalizedSobel(const GrayView& image, int x0, int y0, int widt
 /// `threshold` (brighter above than below), else 0; row-major, the region clamped to the image as
 /// for CnsImage. The same answers as thresholding contrastNormalizedSobel's -gy, with no gx and no
 /// normalizer where the Sobel alone is too weak to pass (the normalizer is never above 1/σ).
-struct CnsEdgeMask {
-  int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the region in image pixels
+struct CnsEdgeMask : CnsRegion {
   std::vector<std::uint8_t> on;
   bool at(int x, int y) const { return on[(y - y0) * width + (x - x0)] != 0; }
 };
