@@ -44,11 +44,20 @@ RobotProposals propose(const GrayImage& img, const CameraModel& cam) {
       .run(img.view(), cam, all, regions, true);
 }
 
+// A standing NAO's height and width in pixels with its feet at `feet_px` (FieldDimensions' sizes).
+struct RobotSizePx {
+  double h, w;
+};
+RobotSizePx robotSizePx(const CameraModel& cam, const Eigen::Vector2d& feet_px) {
+  const FieldDimensions field = FieldDimensions::loadDefault();
+  const double h = *cam.robotHeightPx(feet_px, field.robot_height_m);
+  return {h, h * field.robot_width_m / field.robot_height_m};
+}
+
 // Two bright legs of a robot standing at `ground` (robot frame), drawn as the camera sees them.
 Eigen::Vector2d drawRobot(GrayImage& img, const CameraModel& cam, const Eigen::Vector2d& ground) {
   const Eigen::Vector2d feet = *cam.robotToPixel({ground.x(), ground.y(), 0});
-  const double h = *cam.robotHeightPx(feet, 0.574);
-  const double w = h * 0.311 / 0.574;
+  const auto [h, w] = robotSizePx(cam, feet);
   cv::Mat m = wrap(img);
   for (double side : {-0.3, 0.3}) {
     const double cx = feet.x() + side * w;
@@ -73,7 +82,7 @@ TEST(RobotProposer, FindsTheFeetOfADrawnRobot) {
   const RobotProposals out = propose(img, cam);
   ASSERT_EQ(out.proposals.size(), 1u);
   const RobotProposal& p = out.proposals[0];
-  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double h = robotSizePx(cam, feet).h;
   EXPECT_NEAR(p.feet_px.y(), feet.y(), 2.0);
   EXPECT_NEAR(p.feet_px.x(), feet.x(), 0.15 * h);
   EXPECT_LT(p.box.y0, feet.y() - 0.9 * h);
@@ -107,8 +116,7 @@ TEST(RobotProposer, NothingOnBlankCarpetLinesOrABall) {
 Eigen::Vector2d drawShadedRobot(GrayImage& img, const CameraModel& cam, const Eigen::Vector2d& ground,
                                 int leg_gray, int feet_px_tall) {
   const Eigen::Vector2d feet = *cam.robotToPixel({ground.x(), ground.y(), 0});
-  const double h = *cam.robotHeightPx(feet, 0.574);
-  const double w = h * 0.311 / 0.574;
+  const auto [h, w] = robotSizePx(cam, feet);
   cv::Mat m = wrap(img);
   for (double side : {-0.3, 0.3}) {
     const double cx = feet.x() + side * w;
@@ -150,7 +158,7 @@ TEST(RobotProposer, FieldLineJustBelowTheFeetDoesNotBecomeTheFeet) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(5);
   const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
-  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double h = robotSizePx(cam, feet).h;
   cv::Mat m = wrap(img);
   const int line_y = int(feet.y()) + 14;
   cv::rectangle(m, cv::Point(0, line_y), cv::Point(639, line_y + 5), cv::Scalar(220), cv::FILLED);
@@ -164,7 +172,7 @@ TEST(RobotProposer, LegsInShadeDarkerThanTheCarpetStillMakeARobot) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(6, 90);
   const Eigen::Vector2d feet = drawShadedRobot(img, cam, {2.0, 0.1}, 40, 6);
-  const double h = *cam.robotHeightPx(feet, 0.574);
+  const double h = robotSizePx(cam, feet).h;
   EXPECT_TRUE(proposedAt(propose(img, cam), feet, h));
 }
 
@@ -174,7 +182,7 @@ TEST(RobotProposer, BallCutByTheLowerBorderHidesNoRobotBehindIt) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(7);
   const Eigen::Vector2d far_feet = drawRobot(img, cam, {4.0, 0.0});
-  const double h = *cam.robotHeightPx(far_feet, 0.574);
+  const double h = robotSizePx(cam, far_feet).h;
   cv::Mat m = wrap(img);
   const cv::Point c(int(far_feet.x()), 479 + 10);
   cv::circle(m, c, 45, cv::Scalar(215), cv::FILLED);
@@ -191,8 +199,7 @@ TEST(RobotProposer, BoxesOfAWideGroupComeAfterAFarRobotUnderTheCap) {
   GrayImage img = carpet(12);
   const Eigen::Vector2d far_feet = drawRobot(img, cam, {5.0, -1.0});
   const Eigen::Vector2d band_feet = *cam.robotToPixel({3.5, 0.6, 0});
-  const double band_h = *cam.robotHeightPx(band_feet, 0.574);
-  const double band_w = band_h * 0.311 / 0.574;
+  const auto [band_h, band_w] = robotSizePx(cam, band_feet);
   ASSERT_GT(band_feet.y(), far_feet.y() + 5);
   ASSERT_GT(far_feet.x(), band_feet.x() + 3 * band_w);  // the band stays clear of the far robot
   cv::Mat m = wrap(img);
@@ -208,7 +215,7 @@ TEST(RobotProposer, BoxesOfAWideGroupComeAfterAFarRobotUnderTheCap) {
   params.max_proposals = 1;
   const RobotProposals capped =
       RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
-  const double h = *cam.robotHeightPx(far_feet, 0.574);
+  const double h = robotSizePx(cam, far_feet).h;
   EXPECT_TRUE(proposedAt(capped, far_feet, h)) << "far feet " << far_feet.transpose() << describe(capped);
   params.defer_width_factor = 100;  // no deferral: the lower band takes the place
   const RobotProposals undeferred =
@@ -222,16 +229,16 @@ TEST(RobotProposer, FarRobotInTheUpperPartOfANearerBoxIsKept) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(8);
   const Eigen::Vector2d near_px = *cam.robotToPixel({0.8, 0.0, 0});
-  const double near_w = *cam.robotHeightPx(near_px, 0.574) * 0.311 / 0.574;
+  const double near_w = robotSizePx(cam, near_px).w;
   const Eigen::Vector2d far_px0 = *cam.robotToPixel({3.0, 0.0, 0});
   const auto far_ground = cam.pixelToGround({near_px.x() - 0.6 * near_w, far_px0.y()});
   ASSERT_TRUE(far_ground.has_value());
   const Eigen::Vector2d far_feet = drawRobot(img, cam, *far_ground);
   const Eigen::Vector2d near_feet = drawRobot(img, cam, {0.8, 0.0});
   const RobotProposals out = propose(img, cam);
-  EXPECT_TRUE(proposedAt(out, near_feet, *cam.robotHeightPx(near_feet, 0.574)))
+  EXPECT_TRUE(proposedAt(out, near_feet, robotSizePx(cam, near_feet).h))
       << "near feet " << near_feet.transpose() << describe(out);
-  EXPECT_TRUE(proposedAt(out, far_feet, *cam.robotHeightPx(far_feet, 0.574)))
+  EXPECT_TRUE(proposedAt(out, far_feet, robotSizePx(cam, far_feet).h))
       << "far feet " << far_feet.transpose() << describe(out);
 }
 
@@ -243,8 +250,7 @@ TEST(RobotProposer, FeetStandAtTheBottomOfTheirDarkLowerPart) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(9, 70);
   const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
-  const double h = *cam.robotHeightPx(feet, 0.574);
-  const double w = h * 0.311 / 0.574;
+  const auto [h, w] = robotSizePx(cam, feet);
   const int panel_px = static_cast<int>(0.05 * h);
   ASSERT_GE(panel_px, 5);
   cv::Mat m = wrap(img);
@@ -262,8 +268,7 @@ TEST(RobotProposer, ALongShadowBelowTheFeetIsNoPartOfThem) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(10, 90);
   const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
-  const double h = *cam.robotHeightPx(feet, 0.574);
-  const double w = h * 0.311 / 0.574;
+  const auto [h, w] = robotSizePx(cam, feet);
   cv::Mat m = wrap(img);
   cv::rectangle(m, cv::Point(int(feet.x() - 0.6 * w), int(feet.y())),
                 cv::Point(int(feet.x() + 0.6 * w), int(feet.y() + 0.25 * h)), cv::Scalar(30),
@@ -461,7 +466,7 @@ void checkFootBlockLine(double yaw_deg, double shadow_ratio = -1) {
     int lowest = 0;
     for (const auto& q : hull) lowest = std::max(lowest, q.y);
     robot.feet_px = {cam.robotToPixel({centre.x(), centre.y(), 0})->x(), double(lowest)};
-    const double h = *cam.robotHeightPx(robot.feet_px, 0.574);
+    const double h = robotSizePx(cam, robot.feet_px).h;
     robot.box = {robot.feet_px.x() - 0.4 * h, robot.feet_px.y() - h, robot.feet_px.x() + 0.4 * h,
                  robot.feet_px.y() + 0.05 * h};
     robot.position_in_robot = centre;
