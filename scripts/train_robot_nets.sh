@@ -29,8 +29,15 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
 "$CF" train --cfg "$MODELS/ori_net.cfg" --data "$DATA/ori/ori_net" --out "$MODELS/ori_net.weights" \
   --classes front,back,side_left,side_right --no-flip side_left side_right --epochs 200 --patience 40 \
   --seed 1 --quiet
-# shellcheck disable=SC2086
+# RobotNet: near robots (side views at every heading, a goal behind them, cut by the top border
+# with the head pitched down) beside the far ones (2.6-5.6 m, the ball at the lower border), held
+# out on near, far and mixed scenes; 60 epochs with patience 12 per round (with 40 / 8 and without
+# robot_near_centre_train the net still rejected near side views, README "Robots and orientation").
 "$CF" learn robot --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
   $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
-  --bootstrap $S/robot_absent.yaml --validation $S/robot_holdout.yaml $COMMON \
+  $S/robot_far_train.yaml $S/robot_far2_train.yaml $S/robot_near_side_train.yaml \
+  $S/robot_near_topcut_train.yaml $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml \
+  --bootstrap $S/robot_absent.yaml \
+  --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
+  --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
   --dataset "$DATA/robot"
