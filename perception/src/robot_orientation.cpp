@@ -41,6 +41,7 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.min_usable_confidence = f.getInRange("min_usable_confidence", 0, 1);
   p.min_side_confidence = f.getInRange("min_side_confidence", 0, 1);
   p.min_side_facing_share = f.getInRange("min_side_facing_share", 0.5, 1);
+  p.keep_most_confident_of_a_class = f.getInRange("keep_most_confident_of_a_class", 0, 1) > 0;
   p.track_max_distance_m = f.getInRange("track_max_distance_m", 0, 10);
   p.track_expiry_s = f.getInRange("track_expiry_s", 0, 60);
   p.filter_buffer_size = static_cast<int>(f.getInRange("filter_buffer_size", 1, 101));
@@ -503,6 +504,7 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
   }
   std::vector<RobotOrientation> orientations;
   std::vector<RobotSide> classes;
+  std::vector<float> confidences;
   for (std::size_t i = 0; i < out.regions.size(); ++i) {
     LineRegion& r = out.regions[i];
     r.usable = usable[2 * i + 1];
@@ -528,7 +530,9 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
           orientationFromLine(r.line_in_robot.a, r.line_in_robot.b, *r.side, position));
     }
     classes.push_back(*r.side);
+    confidences.push_back(r.side_confidence);
   }
+  if (params_.keep_most_confident_of_a_class) keepMostConfidentOfEachClass(orientations, classes, confidences);
   out.orientation = combineLineOrientations(orientations, classes);
   return out;
 }

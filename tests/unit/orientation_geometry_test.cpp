@@ -182,6 +182,31 @@ TEST(ConsistencyCheck, SideLinesWithAFacing) {
   EXPECT_FALSE(combineLineOrientations({{1.0, true}, {1.0, false}}, {RobotSide::kSide, RobotSide::kSide}));
 }
 
+TEST(ConsistencyCheck, KeepsTheMostConfidentRegionOfAClass) {
+  // Two side regions (the paper's check drops both): the surer one stays, wherever it is.
+  std::vector<RobotOrientation> o = {{1.0, true}, {2.5, true}};
+  std::vector<RobotSide> c = {RobotSide::kSide, RobotSide::kSide};
+  keepMostConfidentOfEachClass(o, c, {0.63f, 0.99f});
+  ASSERT_EQ(o.size(), 1u);
+  EXPECT_DOUBLE_EQ(o[0].angle_rad, 2.5);
+  const auto kept = combineLineOrientations(o, c);
+  ASSERT_TRUE(kept);
+  EXPECT_DOUBLE_EQ(kept->angle_rad, 2.5);
+  // Regions of different classes are all kept, in order; of equals the first.
+  o = {{0.5, true}, {1.0, false}, {0.6, true}};
+  c = {RobotSide::kFront, RobotSide::kSide, RobotSide::kFront};
+  keepMostConfidentOfEachClass(o, c, {0.8f, 0.7f, 0.8f});
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[0], RobotSide::kFront);
+  EXPECT_DOUBLE_EQ(o[0].angle_rad, 0.5);
+  EXPECT_EQ(c[1], RobotSide::kSide);
+  // Nothing shared: unchanged.
+  o = {{0.5, true}, {2.0, false}};
+  c = {RobotSide::kFront, RobotSide::kSide};
+  keepMostConfidentOfEachClass(o, c, {0.1f, 0.9f});
+  EXPECT_EQ(o.size(), 2u);
+}
+
 TEST(ConsistencyCheck, AtMostOneOfEachClass) {
   EXPECT_TRUE(classesConsistent({RobotSide::kFront, RobotSide::kSide}));
   EXPECT_FALSE(classesConsistent({RobotSide::kSide, RobotSide::kSide}));

@@ -41,6 +41,25 @@ bool classesConsistent(const std::vector<RobotSide>& classes) {
   return true;
 }
 
+void keepMostConfidentOfEachClass(std::vector<RobotOrientation>& orientations, std::vector<RobotSide>& classes,
+                                  const std::vector<float>& confidences) {
+  const std::size_t n = classes.size();
+  std::vector<RobotOrientation> kept_orientations;
+  std::vector<RobotSide> kept_classes;
+  for (std::size_t i = 0; i < n; ++i) {
+    bool strongest = true;
+    for (std::size_t j = 0; j < n && strongest; ++j) {
+      if (j == i || classes[j] != classes[i]) continue;
+      strongest = confidences[j] < confidences[i] || (confidences[j] == confidences[i] && i < j);
+    }
+    if (!strongest) continue;
+    kept_orientations.push_back(orientations[i]);
+    kept_classes.push_back(classes[i]);
+  }
+  orientations = std::move(kept_orientations);
+  classes = std::move(kept_classes);
+}
+
 std::optional<RobotOrientation> combineLineOrientations(
     const std::vector<RobotOrientation>& orientations, const std::vector<RobotSide>& classes) {
   if (orientations.empty() || orientations.size() != classes.size()) return std::nullopt;

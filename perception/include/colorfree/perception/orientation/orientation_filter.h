@@ -25,6 +25,13 @@ RobotOrientation orientationFromSideLine(const Eigen::Vector2d& line_a, const Ei
 /// The paper's consistency check: at most one region of each class.
 bool classesConsistent(const std::vector<RobotSide>& classes);
 
+/// A softer consistency check: of the regions that share a class, keeps only the one with the
+/// highest `confidences` entry (the first of equals), in the given order; regions of different
+/// classes are kept. Two orthogonal feet lines cannot both be a side, so one class of two is wrong:
+/// the paper's check drops both, this keeps the region OriNet is surer of.
+void keepMostConfidentOfEachClass(std::vector<RobotOrientation>& orientations, std::vector<RobotSide>& classes,
+                                  const std::vector<float>& confidences);
+
 /// Combines the orientations of one robot's classified line regions (the first line, the best
 /// voted, first) into one estimate: every facing-known estimate (front, back, or a side line whose
 /// facing OriNet saw) must agree within 45°, else the estimate is not trusted (empty); the first
