@@ -508,7 +508,7 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
   for (std::size_t i = 0; i < out.regions.size(); ++i) {
     LineRegion& r = out.regions[i];
     r.usable = usable[2 * i + 1];
-    if (r.usable < params_.min_usable_confidence) continue;
+    if (accepted_index[i] < 0) continue;  // OriBoostNet rejected it
     // OriNet: front, back, side facing the observer's left, side facing its right. The class is
     // decided over front / back / side (the two side classes summed); a side region's facing is
     // known only when one of its two classes clearly dominates.
