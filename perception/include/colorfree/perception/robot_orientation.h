@@ -15,13 +15,13 @@
 
 namespace colorfree {
 
-/// Contrast-normalized Sobel of a region: each pixel's Sobel gradient divided by
-/// sqrt(64 · local variance + σ²) over a (2·radius+1)² window, so a clean step edge answers about
-/// 1 whatever its contrast and the lighting. Row-major, region size; gx right, gy down.
 /// A region of the image, clamped to it (pixels).
 struct CnsRegion {
   int x0 = 0, y0 = 0, width = 0, height = 0;
 };
+/// Contrast-normalized Sobel of a region: each pixel's Sobel gradient divided by
+/// sqrt(64 · local variance + σ²) over a (2·radius+1)² window, so a clean step edge answers about
+/// 1 whatever its contrast and the lighting. Row-major, region size; gx right, gy down.
 struct CnsImage : CnsRegion {
   std::vector<float> gx, gy;
   float gyAt(int x, int y) const { return gy[(y - y0) * width + (x - x0)]; }
