@@ -403,7 +403,8 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
       if (v > best) best = v, bi = i, bj = j;
     }
   }
-  if (!ridge || best <= 0) return {x + (bi - half) * cell, y + (bj - half) * cell};
+  const Eigen::Vector2d best_cell(x + (bi - half) * cell, y + (bj - half) * cell);
+  if (!ridge || best <= 0) return best_cell;
   // The ridge: the cells 8-connected to the best one with at least the threshold (cells outside
   // the search disc are 0, so it stays inside); each is marked by setting it below 0 once taken.
   const float threshold = static_cast<float>(p.centre_ridge_fraction) * best;
@@ -430,7 +431,7 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
       }
     }
   }
-  if (sw <= 0) return {x + (bi - half) * cell, y + (bj - half) * cell};
+  if (sw <= 0) return best_cell;
   return {x + (si / sw - half) * cell, y + (sj / sw - half) * cell};
 }
 
