@@ -336,8 +336,12 @@ void responsesInside(const RowBoxes& g, const int* cols, int n, float texture_ga
 // (0, 1), the centroid of the cells around it on its ridge (see the parameter). Returns (x, y) when
 // no cell gets votes.
 struct CentringScratch {
-  std::vector<float> votes, smoothed;
+  std::vector<float> votes, smoothed, all_smoothed;
   std::vector<int> stack;
+  // The sampled pixels' positions and integer gradients (the strong ones first, in scan order),
+  // and the strong ones' strengths and vote cells.
+  std::vector<int> sx, sy, sdx, sdy, cells;
+  std::vector<float> strength;
 };
 
 Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p,
@@ -347,46 +351,102 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
   const int cell = std::max(1, static_cast<int>(r / 8));
   const int half = static_cast<int>(std::ceil(search / cell));
   const int n = 2 * half + 1;
+  // The votes on the grid with a border of one empty cell (so that the 3x3 smoothing needs no
+  // bounds: adding a +0 changes no sum), and after it six cells that take the votes falling
+  // outside the grid (one per vote of a pixel, so that successive ones do not wait on each other).
+  const int w = n + 2;
+  const int trash = w * w;
   std::vector<float>& acc = scratch.votes;
-  acc.assign(static_cast<std::size_t>(n) * n, 0.f);
+  acc.assign(static_cast<std::size_t>(trash) + 6, 0.f);
   const double reach = search + (1 + p.radius_tolerance) * r + 1;
   const int x0 = std::max(1, static_cast<int>(x - reach)), x1 = std::min(image.width - 2, static_cast<int>(x + reach));
   const int y0 = std::max(1, static_cast<int>(y - reach)), y1 = std::min(image.height - 2, static_cast<int>(y + reach));
   const double radii[3] = {(1 - p.radius_tolerance) * r, r, (1 + p.radius_tolerance) * r};
   const float min_grad = static_cast<float>(p.min_gradient);
-  // g2 below is (dx^2 + dy^2) / 4 for the integer differences dx, dy, exactly (all terms are small
-  // multiples of 1/4): the same test on the integers first, for the many weak pixels.
+  // A pixel's gradient (gx, gy) = (dx, dy) / 2 for the integer differences dx, dy, and
+  // gx^2 + gy^2 = (dx^2 + dy^2) / 4 exactly (all terms are small multiples of 1/4): the strength
+  // test on the integers, without a branch (the strong pixels are some 40 %, unpredictable).
   const float min_d2 = 4 * (min_grad * min_grad);
+  const std::size_t most = x1 >= x0 && y1 >= y0
+                               ? static_cast<std::size_t>((x1 - x0) / cell + 1) * ((y1 - y0) / cell + 1)
+                               : 0;
+  if (scratch.sx.size() < most) {
+    for (std::vector<int>* v : {&scratch.sx, &scratch.sy, &scratch.sdx, &scratch.sdy}) v->resize(most);
+    scratch.strength.resize(most);
+    scratch.cells.resize(6 * most);
+  }
+  int* sx = scratch.sx.data();
+  int* sy = scratch.sy.data();
+  int* sdx = scratch.sdx.data();
+  int* sdy = scratch.sdy.data();
+  int m = 0;  // strong pixels so far
   for (int py = y0; py <= y1; py += cell) {
     const std::uint8_t* up = image.row(py - 1);
     const std::uint8_t* row = image.row(py);
     const std::uint8_t* down = image.row(py + 1);
     for (int px = x0; px <= x1; px += cell) {
       const int dx = row[px + 1] - row[px - 1], dy = down[px] - up[px];
-      if (static_cast<float>(dx * dx + dy * dy) < min_d2) continue;
-      const float gx = 0.5f * (static_cast<float>(row[px + 1]) - row[px - 1]);
-      const float gy = 0.5f * (static_cast<float>(down[px]) - up[px]);
-      const float g2 = gx * gx + gy * gy;
-      if (g2 < min_grad * min_grad) continue;
-      const float g = std::sqrt(g2);
-      const double ux = gx / g, uy = gy / g;
-      for (const double rr : radii) {
-        for (const double sign : {1.0, -1.0}) {
-          const double cx = px + 0.5 + sign * rr * ux - x, cy = py + 0.5 + sign * rr * uy - y;
-          // (a division by 1 changes nothing: skipped for the small radii's one-pixel cells)
-          const int i = static_cast<int>(std::floor((cell == 1 ? cx : cx / cell) + 0.5)) + half;
-          if (i < 0 || i >= n) continue;
-          const int j = static_cast<int>(std::floor((cell == 1 ? cy : cy / cell) + 0.5)) + half;
-          if (j < 0 || j >= n) continue;
-          acc[static_cast<std::size_t>(j) * n + i] += g;
-        }
-      }
+      sx[m] = px;
+      sy[m] = py;
+      sdx[m] = dx;
+      sdy[m] = dy;
+      m += !(static_cast<float>(dx * dx + dy * dy) < min_d2);
     }
+  }
+  // Each strong pixel votes for the points r along its gradient, both ways, at the three radii:
+  // the cells first (no branch), then the votes added in the order of the pixels, radii and signs
+  // (so every cell's sum is the same float whatever the vectorisation).
+  float* strength = scratch.strength.data();
+  int* cells = scratch.cells.data();
+  const double cell_d = cell;
+  for (int k = 0; k < m; ++k) {
+    const float gx = 0.5f * static_cast<float>(sdx[k]);
+    const float gy = 0.5f * static_cast<float>(sdy[k]);
+    const float g = std::sqrt(gx * gx + gy * gy);
+    strength[k] = g;
+    const double ux = gx / g, uy = gy / g;
+    for (int v = 0; v < 6; ++v) {
+      const double rr = radii[v / 2];
+      const double sign = v % 2 == 0 ? 1.0 : -1.0;
+      const double cx = sx[k] + 0.5 + sign * rr * ux - x, cy = sy[k] + 0.5 + sign * rr * uy - y;
+      // (a division by 1 changes nothing)
+      const int i = static_cast<int>(std::floor(cx / cell_d + 0.5)) + half;
+      const int j = static_cast<int>(std::floor(cy / cell_d + 0.5)) + half;
+      const bool in = static_cast<unsigned>(i) < static_cast<unsigned>(n) &&
+                      static_cast<unsigned>(j) < static_cast<unsigned>(n);
+      cells[6 * k + v] = in ? (j + 1) * w + i + 1 : trash + v;
+    }
+  }
+  for (int k = 0; k < m; ++k) {
+    const float g = strength[k];
+    for (int v = 0; v < 6; ++v) acc[static_cast<std::size_t>(cells[6 * k + v])] += g;
   }
   // (not for a ball the image border cuts: its visible arc alone votes, and the centroid of the
   // cells drifts into the image)
   const bool ridge = p.centre_ridge_fraction > 0 && p.centre_ridge_fraction < 1 && r >= p.centre_ridge_min_radius_px &&
                      x - r >= 0 && y - r >= 0 && x + r <= image.width && y + r <= image.height;
+  // The 3x3 sums of every cell, in the order the cells are visited (rows, then columns).
+  std::vector<float>& all = scratch.all_smoothed;
+  all.resize(static_cast<std::size_t>(n) * n);
+  for (int j = 0; j < n; ++j) {
+    const float* a0 = acc.data() + static_cast<std::size_t>(j) * w;
+    const float* a1 = a0 + w;
+    const float* a2 = a1 + w;
+    float* out = all.data() + static_cast<std::size_t>(j) * n;
+    for (int i = 0; i < n; ++i) {
+      float v = 0;
+      v += a0[i];
+      v += a0[i + 1];
+      v += a0[i + 2];
+      v += a1[i];
+      v += a1[i + 1];
+      v += a1[i + 2];
+      v += a2[i];
+      v += a2[i + 1];
+      v += a2[i + 2];
+      out[i] = v;
+    }
+  }
   std::vector<float>& sm = scratch.smoothed;
   if (ridge) sm.assign(static_cast<std::size_t>(n) * n, 0.f);
   float best = 0;
@@ -395,10 +455,7 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
     for (int i = 0; i < n; ++i) {
       const double di = (i - half) * cell, dj = (j - half) * cell;
       if (di * di + dj * dj > search * search) continue;
-      float v = 0;
-      for (int b = std::max(0, j - 1); b <= std::min(n - 1, j + 1); ++b) {
-        for (int a = std::max(0, i - 1); a <= std::min(n - 1, i + 1); ++a) v += acc[static_cast<std::size_t>(b) * n + a];
-      }
+      const float v = all[static_cast<std::size_t>(j) * n + i];
       if (ridge) sm[static_cast<std::size_t>(j) * n + i] = v;
       if (v > best) best = v, bi = i, bj = j;
     }

@@ -57,6 +57,8 @@ int probe(int argc, char** argv) {
   env("BP_RIDGEMINR", config.ball_proposer.centre_ridge_min_radius_px);
   if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
   if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
+  // BP_EXACT=1: each proposal's centre, radius and response also printed in full (hexadecimal).
+  const bool exact = std::getenv("BP_EXACT") != nullptr;
   const Pipeline pipeline(config);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
   int truths = 0, prop_hits = 0, hits = 0, fps = 0;
@@ -90,6 +92,11 @@ int probe(int argc, char** argv) {
         std::printf("   prop %2zu (%.1f,%.1f) r=%.1f resp=%.1f dist=%.1f%s boost=%.3f ball=%.3f\n",
                     i, p.centre_px.x(), p.centre_px.y(), p.radius_px, p.response,
                     (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", bc, bn);
+        // Every bit of the proposal (a speedup must leave them as they were).
+        if (exact) {
+          std::printf("        exact %a %a %a %a\n", p.centre_px.x(), p.centre_px.y(),
+                      p.radius_px, p.response);
+        }
       }
       for (const auto& bp : *frame.ball_percepts) {
         const bool m =
