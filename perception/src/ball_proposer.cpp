@@ -342,7 +342,15 @@ struct CentringScratch {
   // and the strong ones' strengths and vote cells.
   std::vector<int> sx, sy, sdx, sdy, cells;
   std::vector<float> strength;
+  std::vector<double> ux, uy;  // the strong ones' gradient directions
 };
+
+// static_cast<int>(std::floor(t)) for |t| < 2^31, in operations the compiler vectorises (it does
+// not vectorise std::floor here).
+inline int floorToInt(double t) {
+  const int i = static_cast<int>(t);  // towards zero
+  return i - (t < static_cast<double>(i));
+}
 
 Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p,
                                 CentringScratch& scratch) {
@@ -373,6 +381,8 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
   if (scratch.sx.size() < most) {
     for (std::vector<int>* v : {&scratch.sx, &scratch.sy, &scratch.sdx, &scratch.sdy}) v->resize(most);
     scratch.strength.resize(most);
+    scratch.ux.resize(most);
+    scratch.uy.resize(most);
     scratch.cells.resize(6 * most);
   }
   int* sx = scratch.sx.data();
@@ -396,30 +406,38 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
   // Each strong pixel votes for the points r along its gradient, both ways, at the three radii:
   // the cells first (no branch), then the votes added in the order of the pixels, radii and signs
   // (so every cell's sum is the same float whatever the vectorisation).
+  // (Loops over the pixels with one kind of work each: the compiler vectorises them.)
   float* strength = scratch.strength.data();
-  int* cells = scratch.cells.data();
-  const double cell_d = cell;
+  double* ux = scratch.ux.data();
+  double* uy = scratch.uy.data();
+  int* cells = scratch.cells.data();  // vote v of pixel k: cells[v * m + k]
   for (int k = 0; k < m; ++k) {
     const float gx = 0.5f * static_cast<float>(sdx[k]);
     const float gy = 0.5f * static_cast<float>(sdy[k]);
     const float g = std::sqrt(gx * gx + gy * gy);
     strength[k] = g;
-    const double ux = gx / g, uy = gy / g;
-    for (int v = 0; v < 6; ++v) {
-      const double rr = radii[v / 2];
-      const double sign = v % 2 == 0 ? 1.0 : -1.0;
-      const double cx = sx[k] + 0.5 + sign * rr * ux - x, cy = sy[k] + 0.5 + sign * rr * uy - y;
+    ux[k] = gx / g;
+    uy[k] = gy / g;
+  }
+  const double cell_d = cell;
+  for (int v = 0; v < 6; ++v) {
+    const double sign_rr = (v % 2 == 0 ? 1.0 : -1.0) * radii[v / 2];
+    int* cv = cells + static_cast<std::size_t>(v) * m;
+    for (int k = 0; k < m; ++k) {
+      const double cx = sx[k] + 0.5 + sign_rr * ux[k] - x, cy = sy[k] + 0.5 + sign_rr * uy[k] - y;
       // (a division by 1 changes nothing)
-      const int i = static_cast<int>(std::floor(cx / cell_d + 0.5)) + half;
-      const int j = static_cast<int>(std::floor(cy / cell_d + 0.5)) + half;
+      const int i = floorToInt(cx / cell_d + 0.5) + half;
+      const int j = floorToInt(cy / cell_d + 0.5) + half;
       const bool in = static_cast<unsigned>(i) < static_cast<unsigned>(n) &&
                       static_cast<unsigned>(j) < static_cast<unsigned>(n);
-      cells[6 * k + v] = in ? (j + 1) * w + i + 1 : trash + v;
+      cv[k] = in ? (j + 1) * w + i + 1 : trash + v;
     }
   }
   for (int k = 0; k < m; ++k) {
     const float g = strength[k];
-    for (int v = 0; v < 6; ++v) acc[static_cast<std::size_t>(cells[6 * k + v])] += g;
+    for (int v = 0; v < 6; ++v) {
+      acc[static_cast<std::size_t>(cells[static_cast<std::size_t>(v) * m + k])] += g;
+    }
   }
   // (not for a ball the image border cuts: its visible arc alone votes, and the centroid of the
   // cells drifts into the image)
