@@ -271,7 +271,8 @@ LineHypothesis refineLine(const LineHypothesis& line, const std::vector<Eigen::V
   } else {
     for (const auto& q : points) {
       const double t = (q - line.a).dot(u);
-      if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -vote_margin && t <= len + vote_margin) {
+      if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -vote_margin &&
+          t <= len + vote_margin) {
         in.push_back(q);
       }
     }
@@ -456,8 +457,10 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
     // Twice: the hull edge's direction is rough, the first fit's much less so.
-    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m, p.line_max_voter_gap_m);
-    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, 0.0, p.line_max_voter_gap_m);
+    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m,
+                      p.line_max_voter_gap_m);
+    line =
+        refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, 0.0, p.line_max_voter_gap_m);
     // The feet's edges meet at right angles: a refitted second line far from orthogonal to the
     // refitted first is no edge of the feet (its class would contradict or mislead the first's).
     if (first_direction && std::abs(line->direction().dot(*first_direction)) > p.second_line_max_refined_cos) {

@@ -135,7 +135,8 @@ TEST(SilhouetteLines, AGapLimitKeepsTwoDistantClustersFromOutvotingAnEdge) {
   const auto pts = twoClustersAndAnEdge();
   SilhouetteLineBounds bounds;
   bounds.vote_distance = 0.003;
-  bounds.vote_margin = 0.1;  // the hull may split the edge into pieces: each gets the whole edge's votes
+  bounds.vote_margin =
+      0.1;  // the hull may split the edge into pieces: each gets the whole edge's votes
   // The paper's voting: the line through both clusters (14 votes, 0°) beats the edge (9, 60°).
   const auto joined = findSilhouetteLines(pts, bounds);
   ASSERT_TRUE(joined.first);
@@ -146,7 +147,9 @@ TEST(SilhouetteLines, AGapLimitKeepsTwoDistantClustersFromOutvotingAnEdge) {
   const auto lines = findSilhouetteLines(pts, bounds);
   ASSERT_TRUE(lines.first);
   EXPECT_EQ(lines.first->votes, 9);
-  EXPECT_NEAR(std::abs(lines.first->direction().dot(Eigen::Vector2d(std::cos(deg(60)), std::sin(deg(60))))), 1.0, 1e-9);
+  EXPECT_NEAR(
+      std::abs(lines.first->direction().dot(Eigen::Vector2d(std::cos(deg(60)), std::sin(deg(60))))),
+      1.0, 1e-9);
   EXPECT_NEAR(lines.first->length(), 0.1, 1e-9);
 }
 

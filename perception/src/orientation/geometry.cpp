@@ -64,9 +64,11 @@ std::vector<Eigen::Vector2d> lineVoters(const Eigen::Vector2d& a, const Eigen::V
     const Eigen::Vector2d ap = p - a;
     const double along = ap.dot(u);
     const double across = std::abs(ap.x() * u.y() - ap.y() * u.x());
-    if (across <= max_distance && along >= -margin && along <= length + margin) voters.emplace_back(along, p);
+    if (across <= max_distance && along >= -margin && along <= length + margin)
+      voters.emplace_back(along, p);
   }
-  std::stable_sort(voters.begin(), voters.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+  std::stable_sort(voters.begin(), voters.end(),
+                   [](const auto& p, const auto& q) { return p.first < q.first; });
   std::size_t best_begin = 0, best_end = voters.size();
   if (max_gap > 0 && !voters.empty()) {
     best_end = 0;
@@ -105,8 +107,8 @@ SilhouetteLines findSilhouetteLines(const std::vector<Eigen::Vector2d>& points,
     const double length = d.norm();
     if (bounds.max_voter_gap > 0) {
       // The extent and votes of the voters' longest contiguous run.
-      const std::vector<Eigen::Vector2d> voters =
-          lineVoters(h.a, h.b, points, bounds.vote_distance, bounds.vote_margin, bounds.max_voter_gap);
+      const std::vector<Eigen::Vector2d> voters = lineVoters(
+          h.a, h.b, points, bounds.vote_distance, bounds.vote_margin, bounds.max_voter_gap);
       if (voters.size() < 2) continue;  // no line: the edge joins two lone points
       h.votes = static_cast<int>(voters.size());
       const Eigen::Vector2d u = d / length, a = h.a;
