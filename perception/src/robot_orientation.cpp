@@ -35,6 +35,7 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.second_line_max_cos = f.getInRange("second_line_max_cos", 0, 1);
   p.second_line_max_refined_cos = f.getInRange("second_line_max_refined_cos", 0, 1);
   p.min_line_votes = f.getInRange("min_line_votes", 0, 1000);
+  p.line_max_voter_gap_m = f.getInRange("line_max_voter_gap_m", 0, 2);
   p.region_margin_fraction = f.getInRange("region_margin_fraction", 0, 2);
   p.region_above_fraction = f.getInRange("region_above_fraction", 0, 2);
   p.region_below_fraction = f.getInRange("region_below_fraction", 0, 2);
@@ -258,16 +259,22 @@ RobotOrientationEstimator RobotOrientationEstimator::loadDefault() {
 namespace {
 // Least-squares refit of a hull line to the silhouette points that voted for it (the hull's
 // vertices are the extreme, noisiest points); the ends are the extreme inliers.
+// With max_gap > 0 only the longest contiguous run of those voters (`lineVoters`).
 LineHypothesis refineLine(const LineHypothesis& line, const std::vector<Eigen::Vector2d>& points,
-                          double vote_distance, double vote_margin) {
+                          double vote_distance, double vote_margin, double max_gap) {
   const Eigen::Vector2d u = line.direction();
   const Eigen::Vector2d n(-u.y(), u.x());
   const double len = line.length();
   std::vector<Eigen::Vector2d> in;
-  for (const auto& q : points) {
-    const double t = (q - line.a).dot(u);
-    if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -vote_margin && t <= len + vote_margin) {
-      in.push_back(q);
+  if (max_gap > 0) {
+    in = lineVoters(line.a, line.b, points, vote_distance, vote_margin, max_gap);
+  } else {
+    for (const auto& q : points) {
+      const double t = (q - line.a).dot(u);
+      if (std::abs((q - line.a).dot(n)) <= vote_distance && t >= -vote_margin &&
+          t <= len + vote_margin) {
+        in.push_back(q);
+      }
     }
   }
   if (in.size() < 3) return line;
@@ -444,13 +451,16 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   bounds.max_length = p.second_line_max_length_m;
   bounds.max_orthogonality_cos = p.second_line_max_cos;
   bounds.viewpoint = camera.position().head<2>();
+  bounds.max_voter_gap = p.line_max_voter_gap_m;
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
   std::optional<Eigen::Vector2d> first_direction;
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
     // Twice: the hull edge's direction is rough, the first fit's much less so.
-    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m);
-    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, 0.0);
+    line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m,
+                      p.line_max_voter_gap_m);
+    line =
+        refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, 0.0, p.line_max_voter_gap_m);
     // The feet's edges meet at right angles: a refitted second line far from orthogonal to the
     // refitted first is no edge of the feet (its class would contradict or mislead the first's).
     if (first_direction && std::abs(line->direction().dot(*first_direction)) > p.second_line_max_refined_cos) {

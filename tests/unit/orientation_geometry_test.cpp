@@ -98,6 +98,61 @@ TEST(SilhouetteLines, WithAViewpointOnlyTheNearEdgesCount) {
   EXPECT_LT(std::abs(behind.first->direction().dot(u)), 0.9);
 }
 
+// Two short clusters 0.27 m apart that happen to line up (one foot's heel, the other foot's toe,
+// seen at 1.4 m in uneven light) and between them no silhouette at all, beside a real foot edge
+// of 0.1 m at 60°: the clusters together out-vote the edge, but no edge of a robot's feet has a
+// 0.27 m hole in it.
+std::vector<Eigen::Vector2d> twoClustersAndAnEdge() {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i < 7; ++i) pts.push_back({0.005 * i, 0});         // cluster A: 0 .. 0.03 m
+  for (int i = 0; i < 7; ++i) pts.push_back({0.30 + 0.005 * i, 0});  // cluster B: 0.30 .. 0.33 m
+  const Eigen::Vector2d start(0.34, 0.005), u(std::cos(deg(60)), std::sin(deg(60)));
+  for (int i = 0; i < 9; ++i) pts.push_back(start + 0.0125 * i * u);  // the foot's edge: 0.1 m
+  return pts;
+}
+
+TEST(LineVoters, OnlyTheLongestContiguousRunWithAGapLimit) {
+  const auto pts = twoClustersAndAnEdge();
+  // Without a gap limit every point near the line votes, ordered along it.
+  const auto all = lineVoters({0.33, 0}, {0, 0}, pts, 0.003, 0.0, 0.0);
+  ASSERT_EQ(all.size(), 14u);
+  EXPECT_NEAR(all.front().x(), 0.33, 1e-12);
+  EXPECT_NEAR(all.back().x(), 0.0, 1e-12);
+  // With one, the runs of 7 are two pieces: the first along the line (from 0.33 m down) stays.
+  const auto run = lineVoters({0.33, 0}, {0, 0}, pts, 0.003, 0.0, 0.1);
+  ASSERT_EQ(run.size(), 7u);
+  for (const auto& p : run) EXPECT_GE(p.x(), 0.30 - 1e-12);
+  // A longer run wins whatever its place.
+  auto more = pts;
+  more.push_back({0.035, 0});
+  const auto longer = lineVoters({0.33, 0}, {0, 0}, more, 0.003, 0.0, 0.1);
+  ASSERT_EQ(longer.size(), 8u);
+  for (const auto& p : longer) EXPECT_LE(p.x(), 0.035 + 1e-12);
+  EXPECT_TRUE(lineVoters({0, 0}, {0, 0}, pts, 0.003, 0.0, 0.1).empty());
+}
+
+TEST(SilhouetteLines, AGapLimitKeepsTwoDistantClustersFromOutvotingAnEdge) {
+  const auto pts = twoClustersAndAnEdge();
+  SilhouetteLineBounds bounds;
+  bounds.vote_distance = 0.003;
+  bounds.vote_margin =
+      0.1;  // the hull may split the edge into pieces: each gets the whole edge's votes
+  // The paper's voting: the line through both clusters (14 votes, 0°) beats the edge (9, 60°).
+  const auto joined = findSilhouetteLines(pts, bounds);
+  ASSERT_TRUE(joined.first);
+  EXPECT_EQ(joined.first->votes, 14);
+  EXPECT_NEAR(std::abs(joined.first->direction().x()), 1.0, 1e-9);
+  // With the gap limit the clusters are 7 votes each and the edge is the first line.
+  bounds.max_voter_gap = 0.1;
+  const auto lines = findSilhouetteLines(pts, bounds);
+  ASSERT_TRUE(lines.first);
+  EXPECT_EQ(lines.first->votes, 9);
+  EXPECT_NEAR(
+      std::abs(lines.first->direction().dot(Eigen::Vector2d(std::cos(deg(60)), std::sin(deg(60))))),
+      1.0, 1e-9);
+  EXPECT_NEAR(lines.first->length(), 0.1, 1e-9);
+}
+
 TEST(CircularMedian, WrapsAroundPlusMinusPi) {
   // Samples around 180°: a linear median would give about 0.
   const std::vector<double> a = {deg(170), deg(-175), deg(178), deg(-170), deg(175)};

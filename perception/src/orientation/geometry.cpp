@@ -52,6 +52,40 @@ int countLineVotes(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
   return votes;
 }
 
+std::vector<Eigen::Vector2d> lineVoters(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                        const std::vector<Eigen::Vector2d>& points,
+                                        double max_distance, double margin, double max_gap) {
+  const Eigen::Vector2d d = b - a;
+  const double length = d.norm();
+  if (length <= 0) return {};
+  const Eigen::Vector2d u = d / length;
+  std::vector<std::pair<double, Eigen::Vector2d>> voters;
+  for (const auto& p : points) {
+    const Eigen::Vector2d ap = p - a;
+    const double along = ap.dot(u);
+    const double across = std::abs(ap.x() * u.y() - ap.y() * u.x());
+    if (across <= max_distance && along >= -margin && along <= length + margin)
+      voters.emplace_back(along, p);
+  }
+  std::stable_sort(voters.begin(), voters.end(),
+                   [](const auto& p, const auto& q) { return p.first < q.first; });
+  std::size_t best_begin = 0, best_end = voters.size();
+  if (max_gap > 0 && !voters.empty()) {
+    best_end = 0;
+    for (std::size_t begin = 0, i = 1; i <= voters.size(); ++i) {
+      if (i < voters.size() && voters[i].first - voters[i - 1].first <= max_gap) continue;
+      if (i - begin > best_end - best_begin) {
+        best_begin = begin;
+        best_end = i;
+      }
+      begin = i;
+    }
+  }
+  std::vector<Eigen::Vector2d> out;
+  for (std::size_t i = best_begin; i < best_end; ++i) out.push_back(voters[i].second);
+  return out;
+}
+
 SilhouetteLines findSilhouetteLines(const std::vector<Eigen::Vector2d>& points,
                                     const SilhouetteLineBounds& bounds) {
   SilhouetteLines out;
@@ -69,10 +103,22 @@ SilhouetteLines findSilhouetteLines(const std::vector<Eigen::Vector2d>& points,
       const Eigen::Vector2d outward(d.y(), -d.x());
       if (outward.dot(*bounds.viewpoint - 0.5 * (h.a + h.b)) <= 0) continue;
     }
-    h.votes = countLineVotes(h.a, h.b, points, bounds.vote_distance, bounds.vote_margin);
-    // The line's extent is that of its voters (a noisy edge's hull splits it into short pieces).
     const Eigen::Vector2d d = h.b - h.a;
     const double length = d.norm();
+    if (bounds.max_voter_gap > 0) {
+      // The extent and votes of the voters' longest contiguous run.
+      const std::vector<Eigen::Vector2d> voters = lineVoters(
+          h.a, h.b, points, bounds.vote_distance, bounds.vote_margin, bounds.max_voter_gap);
+      if (voters.size() < 2) continue;  // no line: the edge joins two lone points
+      h.votes = static_cast<int>(voters.size());
+      const Eigen::Vector2d u = d / length, a = h.a;
+      h.a = a + (voters.front() - a).dot(u) * u;
+      h.b = a + (voters.back() - a).dot(u) * u;
+      candidates.push_back(h);
+      continue;
+    }
+    h.votes = countLineVotes(h.a, h.b, points, bounds.vote_distance, bounds.vote_margin);
+    // The line's extent is that of its voters (a noisy edge's hull splits it into short pieces).
     if (length > 0) {
       const Eigen::Vector2d u = d / length;
       double t0 = 0, t1 = length;

@@ -67,6 +67,9 @@ struct RobotOrientationParams {
   double second_line_max_cos = 0.35;
   double second_line_max_refined_cos = 0.25;  ///< the same bound after both lines are refitted
   double min_line_votes = 6;                 ///< a line with fewer votes is not classified
+  /// A line's voters further apart than this along it are two pieces; only the one with the most
+  /// voters votes and is refitted (0: no limit)
+  double line_max_voter_gap_m = 0.1;
   double region_margin_fraction = 0.25;      ///< region: line width grown by this at both ends
   double region_above_fraction = 0.35;       ///< region height above the line, in robot heights
   double region_below_fraction = 0.06;       ///< below the line, in robot heights

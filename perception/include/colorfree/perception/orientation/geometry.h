@@ -28,6 +28,14 @@ int countLineVotes(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                    const std::vector<Eigen::Vector2d>& points, double max_distance,
                    double margin = 0);
 
+/// The points voting for the line through `a` and `b` (within `max_distance` of it, projecting
+/// within the segment extended by `margin`), ordered along a -> b, and with `max_gap` > 0 only
+/// the longest contiguous run of them (no two consecutive voters more than `max_gap` apart along
+/// the line; of runs with as many voters, the first).
+std::vector<Eigen::Vector2d> lineVoters(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                        const std::vector<Eigen::Vector2d>& points,
+                                        double max_distance, double margin, double max_gap);
+
 /// Bounds for choosing the silhouette lines (units those of the points, e.g. metres on the
 /// ground).
 struct SilhouetteLineBounds {
@@ -36,6 +44,10 @@ struct SilhouetteLineBounds {
   double max_length = 0.30;        ///< second line: longest accepted
   double max_orthogonality_cos = 0.35;  ///< second line: |cos| of its angle to the first, at most
   double vote_margin = 0;          ///< a point votes when its projection is within this of the edge's ends
+  /// Voters further apart than this along the line are two pieces, and only the piece with the
+  /// most voters votes (a line through two separate objects, e.g. one foot's heel and the other's
+  /// toe, is no edge); 0: no limit.
+  double max_voter_gap = 0;
   /// Where the silhouette is seen from (the camera's ground point, e.g. the robot frame's
   /// origin). When set, only the hull edges facing it are candidates: the lower silhouette is
   /// the near side of the hull, the edge closing the hull behind it is no edge of the robot.
@@ -43,7 +55,8 @@ struct SilhouetteLineBounds {
 };
 
 /// The paper's lines generator on silhouette points: every pair of consecutive hull vertices is a
-/// candidate, validated by voting over all points (its ends are moved to its outermost voters);
+/// candidate, validated by voting over all points (its ends are moved to its outermost voters;
+/// with `max_voter_gap`, of its voters' longest contiguous run);
 /// the best is the first line; the second is the
 /// best-voted remaining candidate that meets the length bounds and is roughly orthogonal to it.
 /// With a viewpoint only edges facing it count. Empty when there are fewer than two hull vertices
