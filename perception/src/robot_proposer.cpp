@@ -21,6 +21,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.feet_dark_height_fraction = f.getInRange("feet_dark_height_fraction", 0, 1);
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
   p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
+  p.shade_side_width_factor = f.getInRange("shade_side_width_factor", 0, 10);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
   p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
@@ -156,10 +157,23 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           // does not borrow the robot's pixels above the carpet between them.
           const int max_gap =
               std::max(p.max_gap_px, static_cast<int>(p.max_gap_height_fraction * *expected));
+          // A pixel darker than the carpet is a leg in shade only where the carpet beside the
+          // robot, to one side or the other, is brighter than it too: the far carpet that is
+          // darker than the near one (light falling off across a field line) is dark on both.
+          const int side_px = static_cast<int>(
+              std::lround(p.shade_side_width_factor * *expected * width_per_height));
+          const int x_left = x - side_px, x_right = x + side_px;
+          const bool left_in = x_left >= 0, right_in = x_right < image.width;
+          const auto in_shade = [&](int yy, double d) {
+            if (carpet - d <= thr) return false;
+            if (side_px <= 0 || (!left_in && !right_in)) return true;
+            return (left_in && image.at(x_left, yy) - d > thr) ||
+                   (right_in && image.at(x_right, yy) - d > thr);
+          };
           int run_top = y, gap = 0, filled = 0;
           for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
             const double d = image.at(x, yy);
-            if (d - ref > thr || (!carpet_unknown && carpet - d > thr)) {
+            if (d - ref > thr || (!carpet_unknown && in_shade(yy, d))) {
               ++filled;
               run_top = yy;
               gap = 0;
