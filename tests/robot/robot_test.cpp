@@ -195,7 +195,26 @@ TEST(RobotProposer, DarkerCarpetBeyondAFieldLineIsNoRobotInShade) {
   const RobotProposals out =
       RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
   EXPECT_TRUE(out.proposals.empty()) << describe(out);
-  params.shade_side_width_factor = 0;  // without the test beside the robot: boxes on the line
+  params.beside_width_factor = 0;  // without the test beside the robot: boxes on the line
+  const RobotProposals unchecked =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  EXPECT_FALSE(unchecked.proposals.empty()) << describe(unchecked);
+}
+
+TEST(RobotProposer, CarpetAboveADarkPatchAtTheLowerBorderIsNoRobot) {
+  // A scan stretch that starts at the lower border starts on whatever is there: here a dark
+  // patch (the black patch of a ball cut by the border, a shadow). The carpet above it is
+  // brighter than that start, but no brighter than the carpet beside it: no robot stands there.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(9, 90);
+  cv::rectangle(wrap(img), cv::Point(280, 450), cv::Point(360, 479), cv::Scalar(25), cv::FILLED);
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  const RobotProposals out =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  EXPECT_TRUE(out.proposals.empty()) << describe(out);
+  params.beside_width_factor = 0;  // without the test beside it: a robot box on the patch
   const RobotProposals unchecked =
       RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
   EXPECT_FALSE(unchecked.proposals.empty()) << describe(unchecked);
