@@ -21,6 +21,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.feet_dark_height_fraction = f.getInRange("feet_dark_height_fraction", 0, 1);
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
   p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
+  p.beside_width_factor = f.getInRange("beside_width_factor", 0, 10);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
   p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
@@ -156,10 +157,26 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           // does not borrow the robot's pixels above the carpet between them.
           const int max_gap =
               std::max(p.max_gap_px, static_cast<int>(p.max_gap_height_fraction * *expected));
+          // A pixel darker than the carpet is a leg in shade only where the carpet beside the
+          // robot, to one side or the other, is brighter than it too: the far carpet that is
+          // darker than the near one (light falling off across a field line) is dark on both.
+          // Where the stretch starts at the lower edge the carpet is unknown, and a pixel
+          // brighter than the reference is a robot's only where it is brighter than the carpet
+          // beside it as well: the carpet above a ball cut by the border is no robot.
+          const int side_px = static_cast<int>(
+              std::lround(p.beside_width_factor * *expected * width_per_height));
+          const int x_left = x - side_px, x_right = x + side_px;
+          const bool no_side = side_px <= 0 || (x_left < 0 && x_right >= image.width);
+          const auto beside = [&](int yy, double sign, double d) {
+            return no_side || (x_left >= 0 && sign * (d - image.at(x_left, yy)) > thr) ||
+                   (x_right < image.width && sign * (d - image.at(x_right, yy)) > thr);
+          };
           int run_top = y, gap = 0, filled = 0;
           for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy) {
             const double d = image.at(x, yy);
-            if (d - ref > thr || (!carpet_unknown && carpet - d > thr)) {
+            const bool lit = d - ref > thr && (!carpet_unknown || beside(yy, 1, d));
+            const bool shaded = !carpet_unknown && carpet - d > thr && beside(yy, -1, d);
+            if (lit || shaded) {
               ++filled;
               run_top = yy;
               gap = 0;

@@ -71,6 +71,7 @@ int probe(int argc, char** argv) {
   env("RP_IOU", rpp.max_overlap_iou);
   env("RP_OWN", rpp.own_body_height_fraction);
   env("RP_MAX", rpp.max_proposals);
+  env("RP_SHADE", rpp.beside_width_factor);
   const Pipeline pipeline(config);
   const RobotProposer proposer(config.robot_proposer, config.field);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());

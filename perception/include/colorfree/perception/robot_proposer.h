@@ -34,8 +34,15 @@ struct RobotProposerParams {
   /// A run is a robot's lower body when it reaches at least this fraction of the expected pixel height
   /// of a robot whose feet are at its lower end (lines, the ball and shadows are shorter).
   double min_run_height_fraction = 0.4;
-  /// ... and at least this fraction of the pixels up to that height must be brighter than the carpet.
+  /// ... and at least this fraction of the pixels up to that height must differ from the carpet
+  /// (brighter than it, or darker: legs in shade).
   double min_fill_fraction = 0.6;
+  /// A pixel darker than the carpet fills a run (a leg in shade) only when the pixel this many
+  /// expected robot widths to its left or to its right is brighter than it by the jump too (lit
+  /// carpet beside the robot): carpet darker on both sides is the carpet itself. Where the scan
+  /// stretch starts at the lower edge (the carpet unknown) a brighter pixel likewise fills it only
+  /// when it is brighter than a pixel beside it. 0: no such tests.
+  double beside_width_factor = 1.0;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
   /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
   /// of the expected height (plus 2 px).
