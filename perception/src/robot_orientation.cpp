@@ -1,6 +1,7 @@
 #include "colorfree/perception/robot_orientation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -194,12 +195,23 @@ CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width
                     const std::int32_t* vs, const std::int32_t* vs2) {
                   // Loops the compiler vectorises: the Sobel, the window sums, the decision.
                   for (int x = 0; x < r.width; ++x) minus_gy[x] = -sobelY(up + x, down + x);
-                  std::fill(s.begin(), s.end(), 0);
-                  std::fill(s2.begin(), s2.end(), 0);
-                  for (int i = -radius; i <= radius; ++i) {
+                  if (radius == 2) {
+                    // The shipped radius: the five columns' sums in one pass (exact integers,
+                    // the same sums as below).
+                    std::int32_t* __restrict ps_out = s.data();
+                    std::int32_t* __restrict ps2_out = s2.data();
                     for (int x = 0; x < r.width; ++x) {
-                      s[x] += vs[x + i];
-                      s2[x] += vs2[x + i];
+                      ps_out[x] = vs[x - 2] + vs[x - 1] + vs[x] + vs[x + 1] + vs[x + 2];
+                      ps2_out[x] = vs2[x - 2] + vs2[x - 1] + vs2[x] + vs2[x + 1] + vs2[x + 2];
+                    }
+                  } else {
+                    std::fill(s.begin(), s.end(), 0);
+                    std::fill(s2.begin(), s2.end(), 0);
+                    for (int i = -radius; i <= radius; ++i) {
+                      for (int x = 0; x < r.width; ++x) {
+                        s[x] += vs[x + i];
+                        s2[x] += vs2[x + i];
+                      }
                     }
                   }
                   std::uint8_t* on = &out.on[static_cast<std::size_t>(y) * r.width];
@@ -219,12 +231,14 @@ CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width
                     const auto near = static_cast<std::int32_t>(g2 >= t2q * (1 - 1e-5f));
                     pd[x] = static_cast<std::int32_t>(pg[x] > 0) * (above + 2 * (near - above));  // 1 on, 2 a tie
                   }
-                  bool any_tie = false;
-                  for (int x = 0; x < r.width; ++x) {
-                    on[x] = static_cast<std::uint8_t>(decided[x] == 1);
-                    any_tie |= decided[x] == 2;
-                  }
-                  if (!any_tie) return;
+                  // decided is 0, 1 or 2: bit 0 is "on", bit 1 a tie. Two loops the compiler
+                  // vectorises (restrict: the byte stores alias none of the decisions).
+                  std::uint8_t* __restrict on_out = on;
+                  const std::int32_t* __restrict pdc = pd;
+                  std::int32_t any = 0;
+                  for (int x = 0; x < width; ++x) any |= pdc[x];
+                  for (int x = 0; x < width; ++x) on_out[x] = static_cast<std::uint8_t>(pdc[x] & 1);
+                  if ((any & 2) == 0) return;
                   // ... and near a tie as contrastNormalizedSobel computes gy (negated: exact in
                   // floating point).
                   for (int x = 0; x < r.width; ++x) {
@@ -328,7 +342,9 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   // the carpet's texture, not the feet (white, or lit gray, above the carpet or the dark panels).
   double min_above_gray = 0;
   if (p.silhouette_min_above_carpet_ratio > 0) {
-    std::vector<std::uint8_t> outer;
+    // The median by a histogram of the gray levels: the same value as sorting them.
+    std::array<int, 256> histogram{};
+    int outer_count = 0;
     const int strip = std::max(2, edges.width / 16);
     std::vector<int> columns_beside;
     for (int i = 1; i <= strip; ++i) {
@@ -340,10 +356,13 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     }
     for (int y = edges.y0; y < edges.y0 + edges.height; ++y) {
       const std::uint8_t* row = image.row(y);
-      for (int x : columns_beside) outer.push_back(row[x]);
+      for (int x : columns_beside) ++histogram[row[x]];
+      outer_count += static_cast<int>(columns_beside.size());
     }
-    std::nth_element(outer.begin(), outer.begin() + outer.size() / 2, outer.end());
-    min_above_gray = p.silhouette_min_above_carpet_ratio * outer[outer.size() / 2];
+    // The gray at rank outer_count / 2 in ascending order.
+    int median = 0;
+    for (int rank = outer_count / 2; rank >= histogram[median]; ++median) rank -= histogram[median];
+    min_above_gray = p.silhouette_min_above_carpet_ratio * median;
   }
   // The mean gray of the rows just above an edge whose upper row is y_edge.
   auto aboveGray = [&](int x, int y_edge) {
@@ -378,7 +397,15 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   // on and the row below them off (or not scanned). All scan lines together, row by row.
   std::vector<int> found(columns, 0);
   std::vector<Hit> column_hits(static_cast<std::size_t>(columns) * kMaxHits);
-  std::vector<std::uint8_t> start(w);
+  // Padded by 8 zero bytes: each 8-byte word below is read whole.
+  std::vector<std::uint8_t> start(static_cast<std::size_t>(w) + 8, 0);
+  // The scan line of each mask column, -1 where none is.
+  std::vector<int> column_of(w, -1);
+  for (int x = 0; x < w; ++x) {
+    if ((x - half) % p.scan_step_px != 0) continue;
+    const int c = (x - half) / p.scan_step_px;
+    if (c >= 0 && c < columns) column_of[x] = c;
+  }
   int open = columns;
   for (int r = edges.height - 1 - m; r >= 1 && open > 0; --r) {
     const std::uint8_t* below = &majority[static_cast<std::size_t>(r + m) * w];
@@ -396,12 +423,12 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     const int y = edges.y0 + r;
     for (int x0 = 0; x0 < w; x0 += 8) {
       std::uint64_t word = 0;
-      std::memcpy(&word, &start[x0], static_cast<std::size_t>(std::min(8, w - x0)));
+      std::memcpy(&word, &start[x0], 8);
       if (word == 0) continue;
       for (int x = x0; x < std::min(w, x0 + 8); ++x) {
-        if (!start[x] || (x - half) % p.scan_step_px != 0) continue;
-        const int c = (x - half) / p.scan_step_px;
-        if (c < 0 || c >= columns || found[c] == kMaxHits) continue;
+        if (!start[x]) continue;
+        const int c = column_of[x];
+        if (c < 0 || found[c] == kMaxHits) continue;
         if (min_above_gray > 0 && aboveGray(scan_x[c], y) < min_above_gray) continue;
         column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y + m - 1};
         if (++found[c] == kMaxHits) --open;
