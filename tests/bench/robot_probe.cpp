@@ -6,6 +6,8 @@
 // (green: demanded, grey: not), proposals (blue), percepts (red), feet points (yellow), rejected
 // candidates (magenta).
 //   robot_probe SCENARIO [frames_per_case] [case] [png_dir] [misses_only]
+// With RP_EXACT=1 it also prints every feet point, rejection, proposal and percept of the frame
+// at full precision (to check that a speed-up changes nothing).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -72,6 +74,8 @@ int probe(int argc, char** argv) {
   env("RP_OWN", rpp.own_body_height_fraction);
   env("RP_MAX", rpp.max_proposals);
   env("RP_SHADE", rpp.beside_width_factor);
+  // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
+  const bool exact_dump = std::getenv("RP_EXACT") != nullptr && std::atoi(std::getenv("RP_EXACT")) != 0;
   const Pipeline pipeline(config);
   const RobotProposer proposer(config.robot_proposer, config.field);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
@@ -152,6 +156,28 @@ int probe(int argc, char** argv) {
                     frame.ignore_mask->top_y[fx],
                     frame.robot_net_confidences ? (*frame.robot_net_confidences)[i] : -1.f,
                     m ? " MATCH" : "");
+      }
+      if (exact_dump) {
+        // Every output of the two stages at full precision (speed work must keep them exactly).
+        for (const auto& fp : rp.feet_points_px) std::printf("   exact feet %.17g %.17g\n", fp.x(), fp.y());
+        for (const auto& rj : rp.rejected) {
+          std::printf("   exact rejected %.17g %.17g %s\n", rj.feet_px.x(), rj.feet_px.y(),
+                      robotRejectReasonName(rj.reason));
+        }
+        for (std::size_t i = 0; i < rp.proposals.size(); ++i) {
+          const auto& p = rp.proposals[i];
+          std::printf("   exact prop %.17g %.17g box %.17g %.17g %.17g %.17g net %.9g\n", p.feet_px.x(),
+                      p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
+                      frame.robot_net_confidences && i < frame.robot_net_confidences->size()
+                          ? (*frame.robot_net_confidences)[i]
+                          : -1.f);
+        }
+        for (const auto& p : percepts) {
+          const Eigen::Vector2d g = p.position_in_robot.value_or(Eigen::Vector2d(-1e9, -1e9));
+          std::printf("   exact percept %.17g %.17g box %.17g %.17g %.17g %.17g conf %.9g ground %.17g %.17g\n",
+                      p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
+                      p.confidence, g.x(), g.y());
+        }
       }
       for (const auto& p : percepts) {
         bool m = false;
