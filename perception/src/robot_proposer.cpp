@@ -137,23 +137,22 @@ struct RobotRun {
 // The run of a robot's pixels from row y (the lowest pixel brighter than the reference) up to
 // `needed` rows above the feet row; a carpet gap longer than max_gap ends it. A pixel brighter
 // than the reference counts (where the carpet is unknown, only when it is brighter than the carpet
-// beside it as well), and one darker than the carpet where the carpet beside it, to one side or
-// the other, is brighter. The pixels beside are left_px to the left and right_px to the right
+// beside it, to one side or the other, as well), and one darker than the carpet (legs in shade)
+// where the carpet is known. The pixels beside are left_px to the left and right_px to the right
 // (0: that side is outside the image); no_side: no side test.
 __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptrdiff_t stride, int y,
                                             int feet_y, int needed, int max_gap, double ref,
                                             double carpet, double thr, bool carpet_unknown,
                                             bool no_side, int left_px, int right_px) {
-  const auto beside = [&](const std::uint8_t* px, double sign, double d) {
-    return no_side || (left_px > 0 && sign * (d - px[-left_px]) > thr) ||
-           (right_px > 0 && sign * (d - px[right_px]) > thr);
+  const auto brighter_than_beside = [&](const std::uint8_t* px, double d) {
+    return no_side || (left_px > 0 && d - px[-left_px] > thr) || (right_px > 0 && d - px[right_px] > thr);
   };
   int run_top = y, gap = 0, filled = 0;
   const std::uint8_t* px = column + y * stride;
   for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy, px -= stride) {
     const double d = *px;
-    const bool lit = d - ref > thr && (!carpet_unknown || beside(px, 1, d));
-    const bool shaded = !carpet_unknown && carpet - d > thr && beside(px, -1, d);
+    const bool lit = d - ref > thr && (!carpet_unknown || brighter_than_beside(px, d));
+    const bool shaded = !carpet_unknown && carpet - d > thr;
     if (lit || shaded) {
       ++filled;
       run_top = yy;
@@ -250,9 +249,6 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           // does not borrow the robot's pixels above the carpet between them.
           const int max_gap =
               std::max(p.max_gap_px, static_cast<int>(p.max_gap_height_fraction * *expected));
-          // A pixel darker than the carpet is a leg in shade only where the carpet beside the
-          // robot, to one side or the other, is brighter than it too: the far carpet that is
-          // darker than the near one (light falling off across a field line) is dark on both.
           // Where the stretch starts at the lower edge the carpet is unknown, and a pixel
           // brighter than the reference is a robot's only where it is brighter than the carpet
           // beside it as well: the carpet above a ball cut by the border is no robot.

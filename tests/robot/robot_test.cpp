@@ -176,31 +176,6 @@ TEST(RobotProposer, LegsInShadeDarkerThanTheCarpetStillMakeARobot) {
   EXPECT_TRUE(proposedAt(propose(img, cam), feet, h));
 }
 
-TEST(RobotProposer, DarkerCarpetBeyondAFieldLineIsNoRobotInShade) {
-  // The light falls off across a field line: the carpet beyond it is darker than the carpet
-  // before it by more than the jump, on the whole row. Against the near carpet it looked like
-  // legs in shade above the line (a robot box stood on the line); beside the scan line it is as
-  // dark, so it is carpet.
-  const CameraModel cam = testCamera();
-  GrayImage img = carpet(7, 95);
-  const int line_y = 300;
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> noise(0, 3);
-  for (int y = 0; y < line_y; ++y)
-    for (int x = 0; x < 640; ++x) img.at(x, y) = static_cast<std::uint8_t>(70 + noise(rng));
-  cv::rectangle(wrap(img), cv::Point(0, line_y), cv::Point(639, line_y + 7), cv::Scalar(210), cv::FILLED);
-  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
-  const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
-  RobotProposerParams params = RobotProposerParams::loadDefault();
-  const RobotProposals out =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
-  EXPECT_TRUE(out.proposals.empty()) << describe(out);
-  params.beside_width_factor = 0;  // without the test beside the robot: boxes on the line
-  const RobotProposals unchecked =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
-  EXPECT_FALSE(unchecked.proposals.empty()) << describe(unchecked);
-}
-
 TEST(RobotProposer, CarpetAboveADarkPatchAtTheLowerBorderIsNoRobot) {
   // A scan stretch that starts at the lower border starts on whatever is there: here a dark
   // patch (the black patch of a ball cut by the border, a shadow). The carpet above it is

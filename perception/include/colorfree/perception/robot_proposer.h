@@ -37,11 +37,10 @@ struct RobotProposerParams {
   /// ... and at least this fraction of the pixels up to that height must differ from the carpet
   /// (brighter than it, or darker: legs in shade).
   double min_fill_fraction = 0.6;
-  /// A pixel darker than the carpet fills a run (a leg in shade) only when the pixel this many
-  /// expected robot widths to its left or to its right is brighter than it by the jump too (lit
-  /// carpet beside the robot): carpet darker on both sides is the carpet itself. Where the scan
-  /// stretch starts at the lower edge (the carpet unknown) a brighter pixel likewise fills it only
-  /// when it is brighter than a pixel beside it. 0: no such tests.
+  /// Where the scan stretch starts at the lower edge of the image or the own body (the carpet
+  /// unknown: the stretch may start on the ball cut by the border), a pixel brighter than the
+  /// reference fills a run only when it is brighter by the jump than the pixel this many expected
+  /// robot widths to its left or to its right too (the carpet beside the robot). 0: no such test.
   double beside_width_factor = 1.0;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
   /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
