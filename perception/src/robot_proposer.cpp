@@ -140,12 +140,13 @@ struct RobotRun {
 // beside it, to one side or the other, as well), and one darker than the carpet (legs in shade)
 // where the carpet is known. The pixels beside are left_px to the left and right_px to the right
 // (0: that side is outside the image); no_side: no side test.
-__attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptrdiff_t stride, int y,
-                                            int feet_y, int needed, int max_gap, double ref,
+__attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptrdiff_t stride,
+                                            int y, int feet_y, int needed, int max_gap, double ref,
                                             double carpet, double thr, bool carpet_unknown,
                                             bool no_side, int left_px, int right_px) {
   const auto brighter_than_beside = [&](const std::uint8_t* px, double d) {
-    return no_side || (left_px > 0 && d - px[-left_px] > thr) || (right_px > 0 && d - px[right_px] > thr);
+    return no_side || (left_px > 0 && d - px[-left_px] > thr) ||
+           (right_px > 0 && d - px[right_px] > thr);
   };
   int run_top = y, gap = 0, filled = 0;
   const std::uint8_t* px = column + y * stride;
@@ -252,13 +253,13 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           // Where the stretch starts at the lower edge the carpet is unknown, and a pixel
           // brighter than the reference is a robot's only where it is brighter than the carpet
           // beside it as well: the carpet above a ball cut by the border is no robot.
-          const int side_px = static_cast<int>(
-              std::lround(p.beside_width_factor * *expected * width_per_height));
+          const int side_px =
+              static_cast<int>(std::lround(p.beside_width_factor * *expected * width_per_height));
           const int x_left = x - side_px, x_right = x + side_px;
           const bool no_side = side_px <= 0 || (x_left < 0 && x_right >= image.width);
-          const RobotRun run = robotRun(column, stride, y, feet_y, needed, max_gap, ref, carpet, thr,
-                                        carpet_unknown, no_side, x_left >= 0 ? side_px : 0,
-                                        x_right < image.width ? side_px : 0);
+          const RobotRun run =
+              robotRun(column, stride, y, feet_y, needed, max_gap, ref, carpet, thr, carpet_unknown,
+                       no_side, x_left >= 0 ? side_px : 0, x_right < image.width ? side_px : 0);
           const int run_top = run.top, filled = run.filled;
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});

@@ -186,12 +186,12 @@ TEST(RobotProposer, CarpetAboveADarkPatchAtTheLowerBorderIsNoRobot) {
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
   const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
   RobotProposerParams params = RobotProposerParams::loadDefault();
-  const RobotProposals out =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  const RobotProposals out = RobotProposer(params, FieldDimensions::loadDefault())
+                                 .run(img.view(), cam, all, regions, true);
   EXPECT_TRUE(out.proposals.empty()) << describe(out);
   params.beside_width_factor = 0;  // without the test beside it: a robot box on the patch
-  const RobotProposals unchecked =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  const RobotProposals unchecked = RobotProposer(params, FieldDimensions::loadDefault())
+                                       .run(img.view(), cam, all, regions, true);
   EXPECT_FALSE(unchecked.proposals.empty()) << describe(unchecked);
 }
 
