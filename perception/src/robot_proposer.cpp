@@ -136,10 +136,10 @@ struct RobotRun {
 
 // The run of a robot's pixels from row y (the lowest pixel brighter than the reference) up to
 // `needed` rows above the feet row; a carpet gap longer than max_gap ends it. A pixel brighter
-// than the reference counts (where the carpet is unknown, only when it is brighter than the carpet
-// beside it, to one side or the other, as well), and one darker than the carpet (legs in shade)
-// where the carpet is known. The pixels beside are left_px to the left and right_px to the right
-// (0: that side is outside the image); no_side: no side test.
+// than the reference counts when it is brighter than the carpet beside it, to one side or the
+// other, as well (left_px to the left, right_px to the right; 0: that side is outside the image;
+// no_side: no such test, as where the carpet is known), and one darker than the carpet (legs in
+// shade) where the carpet is known.
 __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptrdiff_t stride,
                                             int y, int feet_y, int needed, int max_gap, double ref,
                                             double carpet, double thr, bool carpet_unknown,
@@ -152,7 +152,7 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
   const std::uint8_t* px = column + y * stride;
   for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy, px -= stride) {
     const double d = *px;
-    const bool lit = d - ref > thr && (!carpet_unknown || brighter_than_beside(px, d));
+    const bool lit = d - ref > thr && brighter_than_beside(px, d);
     const bool shaded = !carpet_unknown && carpet - d > thr;
     if (lit || shaded) {
       ++filled;
@@ -253,8 +253,10 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           // Where the stretch starts at the lower edge the carpet is unknown, and a pixel
           // brighter than the reference is a robot's only where it is brighter than the carpet
           // beside it as well: the carpet above a ball cut by the border is no robot.
-          const int side_px =
-              static_cast<int>(std::lround(p.beside_width_factor * *expected * width_per_height));
+          const int side_px = carpet_unknown
+                                  ? static_cast<int>(std::lround(p.beside_width_factor * *expected *
+                                                                 width_per_height))
+                                  : 0;
           const int x_left = x - side_px, x_right = x + side_px;
           const bool no_side = side_px <= 0 || (x_left < 0 && x_right >= image.width);
           const RobotRun run =

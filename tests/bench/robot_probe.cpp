@@ -73,7 +73,7 @@ int probe(int argc, char** argv) {
   env("RP_IOU", rpp.max_overlap_iou);
   env("RP_OWN", rpp.own_body_height_fraction);
   env("RP_MAX", rpp.max_proposals);
-  env("RP_SHADE", rpp.beside_width_factor);
+  env("RP_BESIDE", rpp.beside_width_factor);
   // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
   const bool exact_dump = std::getenv("RP_EXACT") != nullptr && std::atoi(std::getenv("RP_EXACT")) != 0;
   const Pipeline pipeline(config);
