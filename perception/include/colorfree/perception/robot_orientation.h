@@ -75,7 +75,7 @@ struct RobotOrientationParams {
   double region_below_fraction = 0.06;       ///< below the line, in robot heights
   double min_usable_confidence = 0.35;       ///< OriBoostNet's usable probability needed
   double min_side_confidence = 0.5;          ///< OriNet's best class probability needed (its two side classes summed)
-  double min_side_facing_share = 0.8;        ///< a side region's facing is known when one side class has this share of the side probability
+  double min_side_facing_share = 0.7;        ///< a side region's facing is known when one side class has this share of the side probability
   bool keep_most_confident_of_a_class = true;  ///< regions that share a class: keep OriNet's most confident one (false: drop all, the paper's check)
   double track_max_distance_m = 0.5;         ///< association of a percept with a track
   double track_expiry_s = 1.0;               ///< a track and its estimate expire after this without samples
