@@ -63,7 +63,7 @@ struct RobotProposerParams {
   double box_below_feet_fraction = 0.04;  ///< box bottom below the feet, in expected heights
   /// A feet point inside a nearer proposal's box up to this fraction of its height above its
   /// feet is that robot's knee, hip or hand and is dropped (higher: a robot behind it).
-  double own_body_height_fraction = 0.5;
+  double own_body_height_fraction = 0.4;
   double max_overlap_iou = 0.45;  ///< of two proposals overlapping more, the one lower in the image stays
   int max_proposals = 12;
 
