@@ -21,8 +21,7 @@ CameraModel testCamera() {
   CameraPose pose;
   pose.height_m = 0.5;
   pose.pitch_rad = 14 * std::numbers::pi / 180;
-  return CameraModel(CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * std::numbers::pi / 180),
-                     pose);
+  return CameraModel(CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * std::numbers::pi / 180), pose);
 }
 
 // Dark, slightly noisy carpet.
@@ -119,16 +118,15 @@ TEST(RobotProposer, NothingOnBlankCarpetLinesOrABall) {
 }
 
 // A robot whose legs have the given gray level above white feet `feet_px_tall` pixels high.
-Eigen::Vector2d drawShadedRobot(GrayImage& img, const CameraModel& cam,
-                                const Eigen::Vector2d& ground, int leg_gray, int feet_px_tall) {
+Eigen::Vector2d drawShadedRobot(GrayImage& img, const CameraModel& cam, const Eigen::Vector2d& ground,
+                                int leg_gray, int feet_px_tall) {
   const Eigen::Vector2d feet = *cam.robotToPixel({ground.x(), ground.y(), 0});
   const auto [h, w] = robotSizePx(cam, feet);
   cv::Mat m = wrap(img);
   for (double side : {-0.3, 0.3}) {
     const double cx = feet.x() + side * w;
     cv::rectangle(m, cv::Point(int(cx - 0.12 * w), int(feet.y() - 0.5 * h)),
-                  cv::Point(int(cx + 0.12 * w), int(feet.y()) - 1), cv::Scalar(leg_gray),
-                  cv::FILLED);
+                  cv::Point(int(cx + 0.12 * w), int(feet.y()) - 1), cv::Scalar(leg_gray), cv::FILLED);
     cv::rectangle(m, cv::Point(int(cx - 0.14 * w), int(feet.y()) - feet_px_tall),
                   cv::Point(int(cx + 0.14 * w), int(feet.y()) - 1), cv::Scalar(210), cv::FILLED);
   }
@@ -144,16 +142,15 @@ std::string describe(const RobotProposals& out) {
     s += " <" + std::to_string(f.x()) + ", " + std::to_string(f.y()) + ">";
   }
   for (const RejectedRobotCandidate& r : out.rejected) {
-    s += " [" + std::string(robotRejectReasonName(r.reason)) + " (" +
-         std::to_string(r.feet_px.x()) + ", " + std::to_string(r.feet_px.y()) + ")]";
+    s += " [" + std::string(robotRejectReasonName(r.reason)) + " (" + std::to_string(r.feet_px.x()) +
+         ", " + std::to_string(r.feet_px.y()) + ")]";
   }
   return s;
 }
 
 bool proposedAt(const RobotProposals& out, const Eigen::Vector2d& feet, double h) {
   for (const RobotProposal& p : out.proposals) {
-    if (std::abs(p.feet_px.y() - feet.y()) <= 2.0 &&
-        std::abs(p.feet_px.x() - feet.x()) <= 0.15 * h) {
+    if (std::abs(p.feet_px.y() - feet.y()) <= 2.0 && std::abs(p.feet_px.x() - feet.x()) <= 0.15 * h) {
       return true;
     }
   }
@@ -240,14 +237,13 @@ TEST(RobotProposer, BoxesOfAWideGroupComeAfterAFarRobotUnderTheCap) {
   const RobotProposals uncapped = proposer.run(img.view(), cam, all, regions, true);
   ASSERT_GE(uncapped.proposals.size(), 3u) << describe(uncapped);  // the band's boxes and the robot
   params.max_proposals = 1;
-  const RobotProposals capped = RobotProposer(params, FieldDimensions::loadDefault())
-                                    .run(img.view(), cam, all, regions, true);
+  const RobotProposals capped =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
   const double h = robotSizePx(cam, far_feet).h;
-  EXPECT_TRUE(proposedAt(capped, far_feet, h))
-      << "far feet " << far_feet.transpose() << describe(capped);
+  EXPECT_TRUE(proposedAt(capped, far_feet, h)) << "far feet " << far_feet.transpose() << describe(capped);
   params.defer_width_factor = 100;  // no deferral: the lower band takes the place
-  const RobotProposals undeferred = RobotProposer(params, FieldDimensions::loadDefault())
-                                        .run(img.view(), cam, all, regions, true);
+  const RobotProposals undeferred =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
   EXPECT_FALSE(proposedAt(undeferred, far_feet, h)) << describe(undeferred);
 }
 
@@ -345,10 +341,10 @@ PixelBox pixelBox(double x0, double y0, double x1, double y1) {
 TEST(RobotDetector, KeptBoxesDropOverlapsAndPartsOfALargerRobot) {
   const RobotDetectorParams p;  // min 0.5, IoU 0.3, inside 0.9
   const PixelBox robot = pixelBox(234, 84, 410, 364);
-  const PixelBox hand = pixelBox(340, 114, 408, 222);      // wholly inside the robot's box
-  const PixelBox shifted = pixelBox(250, 90, 420, 370);    // IoU with the robot's box > 0.3
-  const PixelBox other = pixelBox(500, 100, 560, 200);     // another robot beside it
-  const PixelBox half_out = pixelBox(380, 150, 450, 250);  // half outside: no part of it
+  const PixelBox hand = pixelBox(340, 114, 408, 222);     // wholly inside the robot's box
+  const PixelBox shifted = pixelBox(250, 90, 420, 370);   // IoU with the robot's box > 0.3
+  const PixelBox other = pixelBox(500, 100, 560, 200);    // another robot beside it
+  const PixelBox half_out = pixelBox(380, 150, 450, 250); // half outside: no part of it
   // The hand more confident than its robot: still the robot stays, the hand goes.
   EXPECT_EQ(keptRobotBoxes({hand, robot, other}, {0.9f, 0.8f, 0.7f}, p), (std::vector<int>{1, 2}));
   EXPECT_EQ(keptRobotBoxes({robot, hand}, {0.9f, 0.6f}, p), (std::vector<int>{0}));
@@ -408,9 +404,8 @@ TEST(Cns, MatchesTheDefinitionInsideAndAtTheImageBorder) {
   struct Region {
     int x0, y0, w, h, r;
   };
-  for (const Region& g :
-       {Region{5, 4, 20, 15, 2}, Region{0, 0, 40, 30, 2}, Region{-3, 20, 12, 20, 3},
-        Region{30, -2, 15, 8, 1}, Region{10, 10, 7, 5, 4}}) {
+  for (const Region& g : {Region{5, 4, 20, 15, 2}, Region{0, 0, 40, 30, 2}, Region{-3, 20, 12, 20, 3},
+                          Region{30, -2, 15, 8, 1}, Region{10, 10, 7, 5, 4}}) {
     const CnsImage c = contrastNormalizedSobel(img.view(), g.x0, g.y0, g.w, g.h, g.r, 40.0);
     ASSERT_GT(c.width, 0);
     ASSERT_GT(c.height, 0);
@@ -419,10 +414,8 @@ TEST(Cns, MatchesTheDefinitionInsideAndAtTheImageBorder) {
     for (int y = c.y0; y < c.y0 + c.height; ++y)
       for (int x = c.x0; x < c.x0 + c.width; ++x) {
         const std::size_t k = static_cast<std::size_t>(y - c.y0) * c.width + (x - c.x0);
-        ASSERT_NEAR(c.gy[k], cnsReference(img, x, y, g.r, 40.0, true), 1e-4)
-            << x << "," << y << " r=" << g.r;
-        ASSERT_NEAR(c.gx[k], cnsReference(img, x, y, g.r, 40.0, false), 1e-4)
-            << x << "," << y << " r=" << g.r;
+        ASSERT_NEAR(c.gy[k], cnsReference(img, x, y, g.r, 40.0, true), 1e-4) << x << "," << y << " r=" << g.r;
+        ASSERT_NEAR(c.gx[k], cnsReference(img, x, y, g.r, 40.0, false), 1e-4) << x << "," << y << " r=" << g.r;
       }
   }
 }
@@ -435,22 +428,19 @@ TEST(Cns, EdgeMaskIsTheThresholdedVerticalResponse) {
   for (int y = 0; y < 36; ++y)
     for (int x = 0; x < 48; ++x) {
       noise.at(x, y) = static_cast<std::uint8_t>(v(rng));
-      steps.at(x, y) =
-          static_cast<std::uint8_t>(std::clamp(60 + (y / 5) * 18 - (y % 5) * 3 + d(rng), 0, 255));
+      steps.at(x, y) = static_cast<std::uint8_t>(std::clamp(60 + (y / 5) * 18 - (y % 5) * 3 + d(rng), 0, 255));
     }
   struct Region {
     int x0, y0, w, h, r;
   };
   int on = 0, off = 0;
   for (const GrayImage* img : {&noise, &steps})
-    for (const Region& g :
-         {Region{5, 4, 20, 15, 2}, Region{0, 0, 48, 36, 2}, Region{-3, 20, 12, 20, 3},
-          Region{30, -2, 25, 8, 1}, Region{10, 10, 7, 5, 0}, Region{2, 3, 40, 30, 6}})
+    for (const Region& g : {Region{5, 4, 20, 15, 2}, Region{0, 0, 48, 36, 2}, Region{-3, 20, 12, 20, 3},
+                            Region{30, -2, 25, 8, 1}, Region{10, 10, 7, 5, 0}, Region{2, 3, 40, 30, 6}})
       for (double sigma : {40.0, 5.0})
         for (double t : {0.0, 0.3, 0.5, 1.2}) {
           const CnsImage c = contrastNormalizedSobel(img->view(), g.x0, g.y0, g.w, g.h, g.r, sigma);
-          const CnsEdgeMask m =
-              brightAboveEdgeMask(img->view(), g.x0, g.y0, g.w, g.h, g.r, sigma, t);
+          const CnsEdgeMask m = brightAboveEdgeMask(img->view(), g.x0, g.y0, g.w, g.h, g.r, sigma, t);
           ASSERT_EQ(m.x0, c.x0);
           ASSERT_EQ(m.y0, c.y0);
           ASSERT_EQ(m.width, c.width);
@@ -458,17 +448,14 @@ TEST(Cns, EdgeMaskIsTheThresholdedVerticalResponse) {
           for (int y = c.y0; y < c.y0 + c.height; ++y)
             for (int x = c.x0; x < c.x0 + c.width; ++x) {
               const bool want = -c.gyAt(x, y) > static_cast<float>(t);
-              ASSERT_EQ(m.at(x, y), want)
-                  << x << "," << y << " r=" << g.r << " sigma=" << sigma << " t=" << t;
+              ASSERT_EQ(m.at(x, y), want) << x << "," << y << " r=" << g.r << " sigma=" << sigma << " t=" << t;
               ++(want ? on : off);
             }
         }
   EXPECT_GT(on, 1000);  // both answers are exercised
   EXPECT_GT(off, 1000);
-  EXPECT_TRUE(brightAboveEdgeMask(noise.view(), 60, 0, 10, 10, 2, 40, 0.5)
-                  .on.empty());  // outside the image
-  EXPECT_THROW(brightAboveEdgeMask(noise.view(), 0, 0, 10, 10, kMaxEdgeMaskRadiusPx + 1, 40, 0.5),
-               Error);
+  EXPECT_TRUE(brightAboveEdgeMask(noise.view(), 60, 0, 10, 10, 2, 40, 0.5).on.empty());  // outside the image
+  EXPECT_THROW(brightAboveEdgeMask(noise.view(), 0, 0, 10, 10, kMaxEdgeMaskRadiusPx + 1, 40, 0.5), Error);
 }
 
 RobotOrientationEstimator untrainedEstimator(
@@ -532,18 +519,14 @@ void checkFootBlockLine(double yaw_deg, double shadow_ratio = -1) {
     const RobotLines lines = untrainedEstimator(params).findLines(img.view(), cam, robot);
     int left = 640, right = 0;
     for (const auto& q : hull) left = std::min(left, q.x), right = std::max(right, q.x);
-    auto offBlock = [&](const Eigen::Vector2d& q) {
-      return q.x() < left - 3 || q.x() > right + 3 || q.y() > lowest + 3;
-    };
+    auto offBlock = [&](const Eigen::Vector2d& q) { return q.x() < left - 3 || q.x() > right + 3 || q.y() > lowest + 3; };
     if (shadow_ratio == 0) {
       // Without the test, the shadow's edge left of the block is the lowest long chain there.
-      EXPECT_TRUE(std::any_of(lines.silhouette_px.begin(), lines.silhouette_px.end(), offBlock))
-          << yaw_deg;
+      EXPECT_TRUE(std::any_of(lines.silhouette_px.begin(), lines.silhouette_px.end(), offBlock)) << yaw_deg;
       return;
     }
     // Every silhouette point lies on the block, none on the shadow beside and below it.
-    for (const auto& q : lines.silhouette_px)
-      EXPECT_FALSE(offBlock(q)) << yaw_deg << " " << q.transpose();
+    for (const auto& q : lines.silhouette_px) EXPECT_FALSE(offBlock(q)) << yaw_deg << " " << q.transpose();
     ASSERT_FALSE(lines.regions.empty()) << yaw_deg;
     const Eigen::Vector2d d = lines.regions[0].line_in_robot.direction();
     // The lower silhouette is the block's near edges: the first line lies along one of them.
@@ -587,8 +570,7 @@ TEST(RobotTracks, AssociatesOverFramesAndExpires) {
   ASSERT_EQ(tracks.tracks.size(), 2u);
   EXPECT_NE(f1[0].track_id, f1[1].track_id);
   // Next frame: listed in the other order, both moved a little; a third robot appears.
-  std::vector<RobotPercept> f2{percept(2.1, 1.0, -1.0), percept(1.05, 0.05, 0.6),
-                               percept(3, -2, {})};
+  std::vector<RobotPercept> f2{percept(2.1, 1.0, -1.0), percept(1.05, 0.05, 0.6), percept(3, -2, {})};
   updateRobotTracks(tracks, f2, 0.1, 0.5, filter);
   EXPECT_EQ(f2[0].track_id, f1[1].track_id);
   EXPECT_EQ(f2[1].track_id, f1[0].track_id);
