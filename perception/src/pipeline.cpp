@@ -126,13 +126,17 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
     frame.field_lines = field_lines_.run(image, frame.camera, *frame.ignore_mask, config_.keep_rejected);
   });
   if (robot_detector_) {
+    RobotProposals proposals;
     timed(stats, Stage::kRobotProposals, [&] {
-      frame.robot_proposals =
-          robot_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions).proposals;
+      proposals =
+          robot_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions);
     });
     timed(stats, Stage::kRobotDetector, [&] {
+      std::vector<RobotProposal> classified;
       std::vector<float> confidences;
-      frame.robot_percepts = robot_detector_->run(image, frame.camera, *frame.robot_proposals, &confidences);
+      frame.robot_percepts = robot_detector_->run(image, frame.camera, proposals.proposals,
+                                                  proposals.held_back, &classified, &confidences);
+      frame.robot_proposals = std::move(classified);
       frame.robot_net_confidences = std::move(confidences);
     });
     timed(stats, Stage::kRobotOrientation, [&] {

@@ -15,6 +15,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.min_confidence = f.getInRange("min_confidence", 0, 1);
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
   p.max_inside_fraction = f.getInRange("max_inside_fraction", 0, 1);
+  p.min_held_back_confidence = f.getInRange("min_held_back_confidence", 0, 1);
   f.finish();
   return p;
 }
@@ -95,31 +96,57 @@ std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
 std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const CameraModel& camera,
                                              const std::vector<RobotProposal>& proposals,
                                              std::vector<float>* confidences) const {
-  std::vector<RobotPercept> out;
-  if (confidences) confidences->clear();
-  if (proposals.empty()) return out;
-  std::vector<cnn::PatchBox> boxes;
-  boxes.reserve(proposals.size());
-  for (const RobotProposal& p : proposals) boxes.push_back(robotPatchBox(p));
-  std::vector<float> probs;
-  net_.classify(image, boxes, probs);
-  std::vector<PixelBox> proposal_boxes;
-  std::vector<float> robot(proposals.size());
-  for (std::size_t i = 0; i < proposals.size(); ++i) {
-    robot[i] = probs[2 * i + 1];
-    proposal_boxes.push_back(proposals[i].box);
+  return run(image, camera, proposals, {}, nullptr, confidences);
+}
+
+std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const CameraModel& camera,
+                                             const std::vector<RobotProposal>& proposals,
+                                             const std::vector<HeldBackRobotProposal>& held_back,
+                                             std::vector<RobotProposal>* classified,
+                                             std::vector<float>* confidences) const {
+  std::vector<RobotProposal> seen = proposals;
+  std::vector<float> robot;
+  const auto classify = [&](std::size_t from) {
+    if (seen.size() == from) return;
+    std::vector<cnn::PatchBox> boxes;
+    boxes.reserve(seen.size() - from);
+    for (std::size_t i = from; i < seen.size(); ++i) boxes.push_back(robotPatchBox(seen[i]));
+    std::vector<float> probs;
+    net_.classify(image, boxes, probs);
+    for (std::size_t i = 0; i < boxes.size(); ++i) robot.push_back(probs[2 * i + 1]);
+  };
+  classify(0);
+  for (const HeldBackRobotProposal& h : held_back) {
+    bool free = true;
+    for (int k : h.nearer) {
+      if (k < 0 || k >= static_cast<int>(proposals.size())) {
+        throw Error("robot detector: a held-back proposal refers to no proposal");
+      }
+      free &= robot[k] < params_.min_confidence;
+    }
+    if (free) seen.push_back(h.proposal);
   }
-  if (confidences) *confidences = robot;
-  const std::vector<int> final_index = keptRobotBoxes(proposal_boxes, robot, params_);
-  for (int i : final_index) {
-    const RobotProposal& p = proposals[i];
+  classify(proposals.size());
+  std::vector<PixelBox> proposal_boxes;
+  proposal_boxes.reserve(seen.size());
+  for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
+  // Held-back boxes under their own bar take no part in the choice.
+  std::vector<float> accepted = robot;
+  for (std::size_t i = proposals.size(); i < seen.size(); ++i) {
+    if (accepted[i] < params_.min_held_back_confidence) accepted[i] = 0;
+  }
+  std::vector<RobotPercept> out;
+  for (int i : keptRobotBoxes(proposal_boxes, accepted, params_)) {
+    const RobotProposal& p = seen[i];
     RobotPercept r;
     r.box = p.box;
     r.feet_px = p.feet_px;
-    r.confidence = probs[2 * i + 1];
+    r.confidence = robot[i];
     r.position_in_robot = camera.pixelToGround(p.feet_px);
     out.push_back(r);
   }
+  if (confidences) *confidences = std::move(robot);
+  if (classified) *classified = std::move(seen);
   return out;
 }
 

@@ -34,6 +34,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.own_body_height_fraction = f.getInRange("own_body_height_fraction", 0.1, 1);
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
   p.max_proposals = static_cast<int>(f.getInRange("max_proposals", 0, 1000));
+  p.max_held_back = static_cast<int>(f.getInRange("max_held_back", 0, 1000));
   f.finish();
   return p;
 }
@@ -360,25 +361,32 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.proposal.feet_px.y() > b.proposal.feet_px.y();
   });
-  // A candidate overlapping a kept one is dropped: a feet point inside the lower part of a
-  // nearer robot's box is that robot's knee, hip or hand. One inside the upper part is a farther
-  // robot's, or the nearer robot's shoulder or arm: it comes after every free-standing candidate,
-  // so near robots' arms do not take the places of far robots under the cap.
-  enum class Fit { kFree, kBehind, kOverlap };
+  // A candidate overlapping a kept one by more than max_overlap_iou is dropped. One whose feet
+  // point lies inside the lower part of nearer robots' boxes is their knee, hip or hand, or a
+  // robot beside or behind them: it is held back for the detector, which classifies it only when
+  // none of those nearer boxes holds a robot. One inside the upper part of a nearer box is a
+  // farther robot's, or the nearer robot's shoulder or arm: it comes after every free-standing
+  // candidate, so near robots' arms do not take the places of far robots under the cap.
+  enum class Fit { kFree, kBehind, kHeldBack, kOverlap };
+  std::vector<int> nearer;
   const auto fit = [&](const Candidate& c) {
     Fit result = Fit::kFree;
-    for (const RobotProposal& kept : out.proposals) {
+    nearer.clear();
+    for (std::size_t k = 0; k < out.proposals.size(); ++k) {
+      const RobotProposal& kept = out.proposals[k];
       const Eigen::Vector2d& f = c.proposal.feet_px;
       const double kept_h = kept.box.height();
       const bool in_column = f.x() > kept.box.x0 && f.x() < kept.box.x1;
       const bool below_top = f.y() < kept.feet_px.y() - 0.1 * kept_h;
       const bool lower_part = f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h;
-      if ((in_column && below_top && lower_part) || iou(kept.box, c.proposal.box) > p.max_overlap_iou) {
-        return Fit::kOverlap;
+      if (iou(kept.box, c.proposal.box) > p.max_overlap_iou) return Fit::kOverlap;
+      if (in_column && below_top && lower_part) {
+        nearer.push_back(static_cast<int>(k));
+      } else if (in_column && below_top && f.y() > kept.box.y0) {
+        result = Fit::kBehind;
       }
-      if (in_column && below_top && f.y() > kept.box.y0) result = Fit::kBehind;
     }
-    return result;
+    return nearer.empty() ? result : Fit::kHeldBack;
   };
   std::vector<const Candidate*> behind, wide;
   const auto keep = [&](const Candidate& c, bool may_defer) {
@@ -387,10 +395,16 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
       behind.push_back(&c);
       return;
     }
-    if (f == Fit::kOverlap || static_cast<int>(out.proposals.size()) >= p.max_proposals) {
+    if (f == Fit::kHeldBack && static_cast<int>(out.held_back.size()) < p.max_held_back) {
+      out.held_back.push_back({c.proposal, nearer});
+      return;
+    }
+    if (f == Fit::kOverlap || f == Fit::kHeldBack ||
+        static_cast<int>(out.proposals.size()) >= p.max_proposals) {
       if (keep_rejected) {
-        out.rejected.push_back({c.proposal.feet_px, f == Fit::kOverlap ? RobotRejectReason::kOverlap
-                                                                       : RobotRejectReason::kTooMany});
+        out.rejected.push_back({c.proposal.feet_px, f == Fit::kOverlap || f == Fit::kHeldBack
+                                                        ? RobotRejectReason::kOverlap
+                                                        : RobotRejectReason::kTooMany});
       }
       return;
     }

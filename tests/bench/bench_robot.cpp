@@ -31,9 +31,12 @@ struct Fixture {
     frame = std::make_unique<Frame>(rendered.image.view(), rendered.truth.camera.model);
     Pipeline(PipelineConfig::loadDefault()).process(*frame);
     proposals = proposer.run(frame->image, frame->camera, *frame->ignore_mask, *frame->contrast_regions);
-    robots = detector.run(frame->image, frame->camera, proposals.proposals);
-    std::fprintf(stderr, "bench frame: %zu proposals, %zu robots detected\n", proposals.proposals.size(),
-                 robots.size());
+    std::vector<RobotProposal> classified;
+    robots = detector.run(frame->image, frame->camera, proposals.proposals, proposals.held_back,
+                          &classified);
+    std::fprintf(
+        stderr, "bench frame: %zu proposals, %zu held back, %zu classified, %zu robots detected\n",
+        proposals.proposals.size(), proposals.held_back.size(), classified.size(), robots.size());
   }
 };
 
@@ -54,7 +57,9 @@ void bmRobotProposals(benchmark::State& state) {
 void bmRobotClassification(benchmark::State& state) {
   Fixture& f = fixture();
   for (auto _ : state) {
-    auto out = f.detector.run(f.frame->image, f.frame->camera, f.proposals.proposals);
+    std::vector<RobotProposal> classified;
+    auto out = f.detector.run(f.frame->image, f.frame->camera, f.proposals.proposals,
+                              f.proposals.held_back, &classified);
     benchmark::DoNotOptimize(out);
   }
 }

@@ -73,6 +73,8 @@ int probe(int argc, char** argv) {
   env("RP_IOU", rpp.max_overlap_iou);
   env("RP_OWN", rpp.own_body_height_fraction);
   env("RP_MAX", rpp.max_proposals);
+  env("RP_HELD", rpp.max_held_back);
+  env("RD_HELD", config.robot_detector.min_held_back_confidence);
   env("RP_BESIDE", rpp.beside_width_factor);
   // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
   const bool exact_dump = std::getenv("RP_EXACT") != nullptr && std::atoi(std::getenv("RP_EXACT")) != 0;
@@ -151,11 +153,20 @@ int probe(int argc, char** argv) {
         bool m = false;
         for (const RobotInImage& r : truth.robots) m = m || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
         const int fx = std::clamp(static_cast<int>(p.feet_px.x()), 0, frame.ignore_mask->width - 1);
-        std::printf("   prop %zu feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) boundary=%d net=%.3f%s\n",
-                    i, p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
-                    frame.ignore_mask->top_y[fx],
-                    frame.robot_net_confidences ? (*frame.robot_net_confidences)[i] : -1.f,
-                    m ? " MATCH" : "");
+        std::printf(
+            "   prop %zu feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) boundary=%d net=%.3f%s%s\n",
+            i, p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
+            frame.ignore_mask->top_y[fx],
+            frame.robot_net_confidences ? (*frame.robot_net_confidences)[i] : -1.f,
+            m ? " MATCH" : "", i >= rp.proposals.size() ? " HELD BACK, FREED" : "");
+        if (i >= rp.proposals.size() && frame.robot_net_confidences) {
+          for (const HeldBackRobotProposal& h : rp.held_back) {
+            if (h.proposal.feet_px != p.feet_px) continue;
+            for (int k : h.nearer)
+              std::printf("     behind prop %d net=%.3f\n", k, (*frame.robot_net_confidences)[k]);
+            break;
+          }
+        }
       }
       if (exact_dump) {
         // Every output of the two stages at full precision (speed work must keep them exactly).

@@ -286,6 +286,60 @@ TEST(RobotProposer, FarRobotBesideANearOneAboveItsKneesIsKept) {
       << "far feet " << far_feet.transpose() << describe(out);
 }
 
+TEST(RobotProposer, FarRobotInTheLowerPartOfANearerBoxIsHeldBack) {
+  // A far robot beside a near one, its feet inside the near robot's box 0.25 of the near robot's
+  // height above its feet: where the near robot's hand could be. It is no proposal of its own but
+  // held back behind the near one (the detector decides); with no room for held-back candidates
+  // it is dropped as an overlap.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(10);
+  const Eigen::Vector2d near_px = *cam.robotToPixel({0.8, 0.0, 0});
+  const auto [near_h, near_w] = robotSizePx(cam, near_px);
+  const auto far_ground =
+      cam.pixelToGround({near_px.x() + 0.3 * near_w, near_px.y() - 0.25 * near_h});
+  ASSERT_TRUE(far_ground.has_value());
+  const Eigen::Vector2d far_feet = drawRobot(img, cam, *far_ground);
+  const Eigen::Vector2d near_feet = drawRobot(img, cam, {0.8, 0.0});
+  const double far_h = robotSizePx(cam, far_feet).h;
+  const RobotProposals out = propose(img, cam);
+  ASSERT_TRUE(proposedAt(out, near_feet, near_h)) << describe(out);
+  EXPECT_FALSE(proposedAt(out, far_feet, far_h)) << describe(out);
+  int near_index = -1;
+  for (std::size_t i = 0; i < out.proposals.size(); ++i) {
+    if (std::abs(out.proposals[i].feet_px.y() - near_feet.y()) <= 2)
+      near_index = static_cast<int>(i);
+  }
+  // (The near robot's own crotch edge is held back too.)
+  const HeldBackRobotProposal* far = nullptr;
+  std::string held;
+  for (const HeldBackRobotProposal& h : out.held_back) {
+    held += " (" + std::to_string(h.proposal.feet_px.x()) + ", " +
+            std::to_string(h.proposal.feet_px.y()) + ")";
+    if (std::abs(h.proposal.feet_px.y() - far_feet.y()) <= 2 &&
+        std::abs(h.proposal.feet_px.x() - far_feet.x()) <= 0.3 * far_h) {
+      far = &h;
+    }
+  }
+  ASSERT_NE(far, nullptr) << "far feet " << far_feet.transpose() << " held back" << held
+                          << describe(out);
+  EXPECT_EQ(far->nearer, (std::vector<int>{near_index}));
+
+  RobotProposerParams none = RobotProposerParams::loadDefault();
+  none.max_held_back = 0;
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const RobotProposals dropped =
+      RobotProposer(none, FieldDimensions::loadDefault())
+          .run(img.view(), cam, all, HighContrastDetector().run(img.view(), all), true);
+  EXPECT_TRUE(dropped.held_back.empty());
+  EXPECT_EQ(dropped.proposals.size(), out.proposals.size());
+  bool overlap = false;
+  for (const RejectedRobotCandidate& r : dropped.rejected) {
+    overlap |=
+        r.reason == RobotRejectReason::kOverlap && std::abs(r.feet_px.y() - far_feet.y()) <= 2;
+  }
+  EXPECT_TRUE(overlap) << describe(dropped);
+}
+
 TEST(RobotProposer, FeetStandAtTheBottomOfTheirDarkLowerPart) {
   // The feet's dark side panels (darker than the carpet) under the bright legs: the robot stands
   // at their bottom, not at the bright pixels above them (the darker reference after the dark
@@ -352,6 +406,68 @@ TEST(RobotDetector, KeptBoxesDropOverlapsAndPartsOfALargerRobot) {
   EXPECT_EQ(keptRobotBoxes({robot, half_out}, {0.9f, 0.8f}, p), (std::vector<int>{0, 1}));
   EXPECT_EQ(keptRobotBoxes({robot, other}, {0.4f, 0.6f}, p), (std::vector<int>{1}));  // below min
   EXPECT_THROW(keptRobotBoxes({robot}, {}, p), Error);
+}
+
+// A stand-in for RobotNet: its robot probability is sigmoid(40 (patch mean / 255) - 20), above
+// 0.5 on patches brighter than mid-gray.
+RobotDetector brightnessDetector() {
+  cnn::Net n = cnn::parseDarknetCfg(
+      "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
+      "[convolutional]\nfilters=2\nsize=1\nstride=1\nactivation=linear\n\n[avgpool]\n\n[softmax]\n",
+      "brightness net");
+  n.params() = {0.0f, -20.0f, 0.0f, 40.0f};  // biases (no robot, robot), then weights
+  return RobotDetector(RobotDetectorParams{}, cnn::Classifier(std::move(n)));
+}
+
+TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) {
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(400, 100), cv::Point(460, 220), cv::Scalar(230), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const auto proposal = [](const PixelBox& box) {
+    RobotProposal p;
+    p.box = box;
+    p.feet_px = {(box.x0 + box.x1) / 2, box.y1};
+    return p;
+  };
+  const RobotProposal carpet_box = proposal(pixelBox(100, 100, 300, 420));  // no robot
+  const RobotProposal bright_box = proposal(pixelBox(395, 95, 465, 225));   // a robot
+  const RobotProposal behind = proposal(pixelBox(405, 105, 455, 215));      // held back
+  const RobotDetector detector = brightnessDetector();
+  std::vector<RobotProposal> classified;
+  std::vector<float> confidences;
+
+  // Behind a box without a robot: freed and classified (a robot).
+  auto robots =
+      detector.run(img.view(), cam, {carpet_box}, {{behind, {0}}}, &classified, &confidences);
+  ASSERT_EQ(classified.size(), 2u);
+  ASSERT_EQ(confidences.size(), 2u);
+  EXPECT_LT(confidences[0], 0.5f);
+  EXPECT_GT(confidences[1], 0.5f);
+  ASSERT_EQ(robots.size(), 1u);
+  EXPECT_EQ(robots[0].box.x0, behind.box.x0);
+
+  // Behind a box RobotNet accepts, or behind two of which one is a robot: never classified.
+  robots = detector.run(img.view(), cam, {bright_box}, {{behind, {0}}}, &classified, &confidences);
+  EXPECT_EQ(classified.size(), 1u);
+  EXPECT_EQ(confidences.size(), 1u);
+  ASSERT_EQ(robots.size(), 1u);
+  EXPECT_EQ(robots[0].box.x0, bright_box.box.x0);
+  detector.run(img.view(), cam, {carpet_box, bright_box}, {{behind, {0, 1}}}, &classified,
+               &confidences);
+  EXPECT_EQ(classified.size(), 2u);
+
+  // Freed, but under the held-back candidates' own bar (0.7): RobotNet's robot probability 0.6.
+  cv::rectangle(wrap(img), cv::Point(500, 300), cv::Point(570, 430), cv::Scalar(130), cv::FILLED);
+  const RobotProposal unsure = proposal(pixelBox(505, 305, 565, 425));
+  robots = detector.run(img.view(), cam, {carpet_box}, {{unsure, {0}}}, &classified, &confidences);
+  ASSERT_EQ(confidences.size(), 2u);
+  EXPECT_GT(confidences[1], 0.5f);
+  EXPECT_LT(confidences[1], 0.7f);
+  EXPECT_TRUE(robots.empty());
+
+  EXPECT_THROW(
+      detector.run(img.view(), cam, {carpet_box}, {{behind, {1}}}, &classified, &confidences),
+      Error);
 }
 
 TEST(Cns, SameResponseUnderTwoIlluminationLevels) {

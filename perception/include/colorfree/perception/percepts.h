@@ -36,6 +36,14 @@ struct RobotProposal {
   Eigen::Vector2d feet_px = Eigen::Vector2d::Zero();  ///< the robot's ground point in the image
 };
 
+/// A robot candidate the proposal stage held back: its feet point lies in the lower part of
+/// nearer proposals' boxes, where that robot's knee or hand would be. It is another robot (beside
+/// or behind) only where none of those nearer boxes holds a robot.
+struct HeldBackRobotProposal {
+  RobotProposal proposal;
+  std::vector<int> nearer;  ///< the nearer proposals' indices
+};
+
 /// Which side of a robot a region shows, as OriNet classifies it.
 enum class RobotSide { kFront, kBack, kSide };
 

@@ -31,6 +31,7 @@ struct Frame {
   std::optional<IgnoreMask> ignore_mask;
   std::optional<ContrastRegions> contrast_regions;
   std::optional<FieldLineResult> field_lines;
+  /// The robot proposals RobotNet classified: the proposer's, then the held-back ones it freed.
   std::optional<std::vector<RobotProposal>> robot_proposals;
   std::optional<std::vector<RobotPercept>> robot_percepts;
   /// RobotNet's robot probability per proposal (same order as robot_proposals).

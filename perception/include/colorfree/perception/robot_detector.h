@@ -17,6 +17,9 @@ struct RobotDetectorParams {
   /// An accepted box with at least this fraction of its area inside a larger accepted box is a
   /// part of that robot (its hand, arm or shoulder), whatever the confidences: the larger stays.
   double max_inside_fraction = 0.9;
+  /// A held-back candidate's patch holds parts of the nearer boxes RobotNet rejected, which may
+  /// be a robot RobotNet missed: it becomes a percept only at this robot probability or more.
+  double min_held_back_confidence = 0.7;
 
   bool operator==(const RobotDetectorParams&) const = default;
   static RobotDetectorParams load(const std::string& path);
@@ -44,6 +47,15 @@ class RobotDetector {
   /// `confidences` (optional) gets RobotNet's output for every proposal, in order.
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
                                 const std::vector<RobotProposal>& proposals,
+                                std::vector<float>* confidences = nullptr) const;
+  /// The same, and then the held-back candidates none of whose nearer proposals RobotNet accepted
+  /// (what a box without a robot seemed to hide is free), accepted from min_held_back_confidence.
+  /// `classified` (optional) gets every proposal RobotNet saw: `proposals`, then those held-back
+  /// ones; `confidences` one output each.
+  std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
+                                const std::vector<RobotProposal>& proposals,
+                                const std::vector<HeldBackRobotProposal>& held_back,
+                                std::vector<RobotProposal>* classified,
                                 std::vector<float>* confidences = nullptr) const;
 
  private:

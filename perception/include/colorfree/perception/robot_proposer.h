@@ -62,10 +62,12 @@ struct RobotProposerParams {
   double box_height_factor = 1.08;  ///< proposed box height in expected robot heights
   double box_below_feet_fraction = 0.04;  ///< box bottom below the feet, in expected heights
   /// A feet point inside a nearer proposal's box up to this fraction of its height above its
-  /// feet is that robot's knee, hip or hand and is dropped (higher: a robot behind it).
+  /// feet is that robot's knee, hip or hand (higher: a robot behind it). It is held back: the
+  /// detector classifies it only when RobotNet finds no robot in any such nearer box.
   double own_body_height_fraction = 0.4;
   double max_overlap_iou = 0.45;  ///< of two proposals overlapping more, the one lower in the image stays
   int max_proposals = 12;
+  int max_held_back = 6;  ///< candidates held back behind nearer proposals, at most
 
   bool operator==(const RobotProposerParams&) const = default;
   static RobotProposerParams load(const std::string& path);
@@ -83,6 +85,9 @@ struct RejectedRobotCandidate {
 
 struct RobotProposals {
   std::vector<RobotProposal> proposals;
+  /// Candidates in the lower part of nearer proposals' boxes (see own_body_height_fraction),
+  /// lowest first.
+  std::vector<HeldBackRobotProposal> held_back;
   /// Feet points (lower ends of long enough runs) found by the scan lines, for drawing.
   std::vector<Eigen::Vector2d> feet_points_px;
   std::vector<RejectedRobotCandidate> rejected;  ///< only with keep_rejected
