@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <Eigen/Eigenvalues>
 
 #include "colorfree/perception/cnn/shipped_nets.h"
@@ -185,66 +186,130 @@ CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width
                 std::to_string(kMaxEdgeMaskRadiusPx) + " (the window's sums must fit 32 bits)");
   }
   const CnsNormalizer norm(radius, sigma);
-  const auto n = static_cast<std::int32_t>(norm.n);
   const float t = static_cast<float>(threshold);
-  const float t2 = t * t;
-  std::vector<std::int32_t> minus_gy(r.width), s(r.width), s2(r.width);
-  std::vector<std::int32_t> decided(r.width);
-  forEachCnsRow(image, r, radius,
-                [&](int y, const std::int32_t* up, const std::int32_t*, const std::int32_t* down,
-                    const std::int32_t* vs, const std::int32_t* vs2) {
-                  // Loops the compiler vectorises: the Sobel, the window sums, the decision.
-                  for (int x = 0; x < r.width; ++x) minus_gy[x] = -sobelY(up + x, down + x);
-                  if (radius == 2) {
-                    // The shipped radius: the five columns' sums in one pass (exact integers,
-                    // the same sums as below).
-                    std::int32_t* __restrict ps_out = s.data();
-                    std::int32_t* __restrict ps2_out = s2.data();
-                    for (int x = 0; x < r.width; ++x) {
-                      ps_out[x] = vs[x - 2] + vs[x - 1] + vs[x] + vs[x + 1] + vs[x + 2];
-                      ps2_out[x] = vs2[x - 2] + vs2[x - 1] + vs2[x] + vs2[x + 1] + vs2[x + 2];
-                    }
-                  } else {
-                    std::fill(s.begin(), s.end(), 0);
-                    std::fill(s2.begin(), s2.end(), 0);
-                    for (int i = -radius; i <= radius; ++i) {
-                      for (int x = 0; x < r.width; ++x) {
-                        s[x] += vs[x + i];
-                        s2[x] += vs2[x + i];
-                      }
-                    }
-                  }
-                  std::uint8_t* on = &out.on[static_cast<std::size_t>(y) * r.width];
-                  // Locals, so that the stores below alias none of the loop's inputs.
-                  const int width = r.width;
-                  const std::int32_t nn = n, *ps = s.data(), *ps2 = s2.data(), *pg = minus_gy.data();
-                  const float inv_n2 = norm.inv_n2, sigma2 = norm.sigma2, tt2 = t2;
-                  std::int32_t* pd = decided.data();
-                  for (int x = 0; x < width; ++x) {
-                    // (-gy) / sqrt(q) > t on the squares (the float q as CnsNormalizer::squared
-                    // gives it; the squared Sobel is exact in a float) ...
-                    const std::int32_t var_n2 = std::max(0, nn * ps2[x] - ps[x] * ps[x]);
-                    const float q = 64.0f * static_cast<float>(var_n2) * inv_n2 + sigma2;
-                    const float g = static_cast<float>(std::max(pg[x], 0));
-                    const float g2 = g * g, t2q = tt2 * q;
-                    const auto above = static_cast<std::int32_t>(g2 > t2q * (1 + 1e-5f));
-                    const auto near = static_cast<std::int32_t>(g2 >= t2q * (1 - 1e-5f));
-                    pd[x] = static_cast<std::int32_t>(pg[x] > 0) * (above + 2 * (near - above));  // 1 on, 2 a tie
-                  }
-                  // decided is 0, 1 or 2: bit 0 is "on", bit 1 a tie. Two loops the compiler
-                  // vectorises (restrict: the byte stores alias none of the decisions).
-                  std::uint8_t* __restrict on_out = on;
-                  const std::int32_t* __restrict pdc = pd;
-                  std::int32_t any = 0;
-                  for (int x = 0; x < width; ++x) any |= pdc[x];
-                  for (int x = 0; x < width; ++x) on_out[x] = static_cast<std::uint8_t>(pdc[x] & 1);
-                  if ((any & 2) == 0) return;
-                  // ... and near a tie as contrastNormalizedSobel computes gy (negated: exact in
-                  // floating point).
-                  for (int x = 0; x < r.width; ++x) {
-                    if (decided[x] == 2) on[x] = -(static_cast<float>(-minus_gy[x]) * norm(s[x], s2[x])) > t;
-                  }
-                });
+  // The region grown by a border (the variance window's radius, at least the Sobel's 1 px),
+  // copied once with reads clamped to the image.
+  const int border = std::max(radius, 1);
+  const int w = r.width, pw = r.width + 2 * border, ph = r.height + 2 * border;
+  std::vector<std::uint8_t> pix(static_cast<std::size_t>(pw) * ph);
+  {
+    std::vector<int> col(pw);
+    for (int i = 0; i < pw; ++i) col[i] = std::clamp(r.x0 - border + i, 0, image.width - 1);
+    const int i_lo = std::min(pw, std::max(0, border - r.x0));
+    const int i_hi = std::max(i_lo, std::min(pw, image.width - r.x0 + border));
+    for (int j = 0; j < ph; ++j) {
+      const std::uint8_t* src = image.row(std::clamp(r.y0 - border + j, 0, image.height - 1));
+      std::uint8_t* dst = &pix[static_cast<std::size_t>(j) * pw];
+      for (int i = 0; i < i_lo; ++i) dst[i] = src[col[i]];
+      if (i_hi > i_lo)
+        std::memcpy(dst + i_lo, src + (r.x0 - border + i_lo),
+                    static_cast<std::size_t>(i_hi - i_lo));
+      for (int i = i_hi; i < pw; ++i) dst[i] = src[col[i]];
+    }
+  }
+  // Each pixel's square once (at most 255², a 16-bit value), for the sums of squares.
+  std::vector<std::uint16_t> pix2(pix.size());
+  for (std::size_t i = 0; i < pix.size(); ++i)
+    pix2[i] = static_cast<std::uint16_t>(pix[i] * pix[i]);
+  // The window's sums: per padded row its horizontal sums (values and squares) over the
+  // 2·radius+1 columns around each region column, kept for the 2·radius+2 rows last needed;
+  // per region column the vertical sums of those, slid down row by row. Exact integers: the same
+  // sums in any order.
+  const int ring = 2 * radius + 2;
+  std::vector<std::int32_t> hs(static_cast<std::size_t>(ring) * w), hs2(hs.size());
+  std::vector<std::int32_t> zero(w, 0), s(w, 0), s2(w, 0);
+  auto horizontalSums = [&](int j) {  // padded row j into its ring slot
+    const std::uint8_t* row = &pix[static_cast<std::size_t>(j) * pw + border - radius];
+    const std::uint16_t* row2 = &pix2[static_cast<std::size_t>(j) * pw + border - radius];
+    std::int32_t* __restrict h = &hs[static_cast<std::size_t>(j % ring) * w];
+    std::int32_t* __restrict h2 = &hs2[static_cast<std::size_t>(j % ring) * w];
+    if (radius == 2) {  // the shipped radius, unrolled
+      for (int x = 0; x < w; ++x) {
+        h[x] = std::int32_t{row[x]} + row[x + 1] + row[x + 2] + row[x + 3] + row[x + 4];
+        h2[x] = std::int32_t{row2[x]} + row2[x + 1] + row2[x + 2] + row2[x + 3] + row2[x + 4];
+      }
+    } else {
+      for (int x = 0; x < w; ++x) {
+        std::int32_t sum = 0, sum2 = 0;
+        for (int i = 0; i <= 2 * radius; ++i) {
+          sum += row[x + i];
+          sum2 += row2[x + i];
+        }
+        h[x] = sum;
+        h2[x] = sum2;
+      }
+    }
+  };
+  for (int j = border - radius; j <= border + radius; ++j) {
+    horizontalSums(j);
+    const std::int32_t* h = &hs[static_cast<std::size_t>(j % ring) * w];
+    const std::int32_t* h2 = &hs2[static_cast<std::size_t>(j % ring) * w];
+    for (int x = 0; x < w; ++x) {
+      s[x] += h[x];
+      s2[x] += h2[x];
+    }
+  }
+  const std::int32_t nn = static_cast<std::int32_t>(norm.n);
+  const float inv_n2 = norm.inv_n2, sigma2 = norm.sigma2, t2 = t * t;
+  for (int y = 0; y < r.height; ++y) {
+    // The rows entering and leaving the window (none on the first row: the sums start there).
+    const std::int32_t *come = zero.data(), *come2 = zero.data(), *gone = zero.data(),
+                       *gone2 = zero.data();
+    if (y > 0) {
+      const int j_come = y + border + radius, j_gone = y - 1 + border - radius;
+      horizontalSums(j_come);
+      come = &hs[static_cast<std::size_t>(j_come % ring) * w];
+      come2 = &hs2[static_cast<std::size_t>(j_come % ring) * w];
+      gone = &hs[static_cast<std::size_t>(j_gone % ring) * w];
+      gone2 = &hs2[static_cast<std::size_t>(j_gone % ring) * w];
+    }
+    const std::uint8_t* __restrict up =
+        &pix[static_cast<std::size_t>(y + border - 1) * pw + border];
+    const std::uint8_t* __restrict down = up + 2 * pw;
+    std::int32_t* __restrict ps = s.data();
+    std::int32_t* __restrict ps2 = s2.data();
+    std::uint8_t* __restrict on = &out.on[static_cast<std::size_t>(y) * w];
+    std::int32_t any = 0;
+    // One loop the compiler vectorises: the sums slid, the Sobel, the decision, the byte.
+    for (int x = 0; x < w; ++x) {
+      const std::int32_t sum = ps[x] + come[x] - gone[x], sum2 = ps2[x] + come2[x] - gone2[x];
+      ps[x] = sum;
+      ps2[x] = sum2;
+      const std::int32_t g_int =
+          (static_cast<std::int32_t>(up[x - 1]) + 2 * up[x] + up[x + 1]) -
+          (static_cast<std::int32_t>(down[x - 1]) + 2 * down[x] + down[x + 1]);
+      // (-gy) / sqrt(q) > t on the squares (the float q as CnsNormalizer::squared gives it; the
+      // squared Sobel is exact in a float) ...
+      const std::int32_t var_n2 = std::max(0, nn * sum2 - sum * sum);
+      const float q = 64.0f * static_cast<float>(var_n2) * inv_n2 + sigma2;
+      const float g = static_cast<float>(std::max(g_int, 0));
+      const float g2 = g * g, t2q = t2 * q;
+      const auto above = static_cast<std::int32_t>(g2 > t2q * (1 + 1e-5f));
+      const auto near = static_cast<std::int32_t>(g2 >= t2q * (1 - 1e-5f));
+      const std::int32_t decided =
+          static_cast<std::int32_t>(g_int > 0) * (above + 2 * (near - above));  // 1 on, 2 a tie
+      any |= decided;
+      on[x] = static_cast<std::uint8_t>(decided);
+    }
+    if ((any & 2) == 0) continue;
+    // ... and near a tie (the 2s) as contrastNormalizedSobel computes gy (negated: exact in
+    // floating point).
+    for (int x = 0; x < w; ++x) {
+      if (x % 8 == 0 && x + 8 <= w) {  // eight bytes at a time past the stretches without a tie
+        std::uint64_t eight;
+        std::memcpy(&eight, on + x, 8);
+        eight &= 0x0202020202020202ULL;
+        if (eight == 0) {
+          x += 7;
+          continue;
+        }
+      }
+      if (on[x] != 2) continue;
+      const std::int32_t gy = (static_cast<std::int32_t>(down[x - 1]) + 2 * down[x] + down[x + 1]) -
+                              (static_cast<std::int32_t>(up[x - 1]) + 2 * up[x] + up[x + 1]);
+      on[x] = -(static_cast<float>(gy) * norm(ps[x], ps2[x])) > t;
+    }
+  }
   return out;
 }
 
@@ -342,8 +407,10 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   // the carpet's texture, not the feet (white, or lit gray, above the carpet or the dark panels).
   double min_above_gray = 0;
   if (p.silhouette_min_above_carpet_ratio > 0) {
-    // The median by a histogram of the gray levels: the same value as sorting them.
-    std::array<int, 256> histogram{};
+    // The median by a histogram of the gray levels: the same value as sorting them. Counted in
+    // four histograms, by a column's place in the list, so that neighbouring columns of the same
+    // gray do not wait on each other's increments; summed after.
+    std::array<std::array<int, 256>, 4> quarter{};
     int outer_count = 0;
     const int strip = std::max(2, edges.width / 16);
     std::vector<int> columns_beside;
@@ -356,34 +423,85 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     }
     for (int y = edges.y0; y < edges.y0 + edges.height; ++y) {
       const std::uint8_t* row = image.row(y);
-      for (int x : columns_beside) ++histogram[row[x]];
+      for (std::size_t i = 0; i < columns_beside.size(); ++i)
+        ++quarter[i % 4][row[columns_beside[i]]];
       outer_count += static_cast<int>(columns_beside.size());
     }
+    std::array<int, 256> histogram;
+    for (int g = 0; g < 256; ++g)
+      histogram[g] = quarter[0][g] + quarter[1][g] + quarter[2][g] + quarter[3][g];
     // The gray at rank outer_count / 2 in ascending order.
     int median = 0;
     for (int rank = outer_count / 2; rank >= histogram[median]; ++median) rank -= histogram[median];
     min_above_gray = p.silhouette_min_above_carpet_ratio * median;
   }
-  // The mean gray of the rows just above an edge whose upper row is y_edge.
-  auto aboveGray = [&](int x, int y_edge) {
-    int sum = 0, n = 0;
-    for (int y = y_edge - 1; y >= y_edge - p.silhouette_above_rows_px && y >= 0; --y, ++n) sum += image.row(y)[x];
-    return n > 0 ? static_cast<double>(sum) / n : 0.0;
-  };
+  // An edge passes when the mean gray of the rows just above it (its upper row y_edge) is at least
+  // min_above_gray: sum / n >= min_above_gray with n those rows inside the image. Decided on the
+  // integer sum against the least passing sum per n (the same test as the double quotient's).
+  const int above_rows = p.silhouette_above_rows_px;
+  std::array<int, 17> min_above_sum{};  // silhouette_above_rows_px is at most 16
+  if (min_above_gray > 0) {
+    min_above_sum[0] = std::numeric_limits<int>::max();  // no row above: the mean is 0
+    for (int n = 1; n <= above_rows; ++n) {
+      int sum = static_cast<int>(std::ceil(min_above_gray * n));
+      while (sum > 0 && static_cast<double>(sum - 1) / n >= min_above_gray) --sum;
+      while (static_cast<double>(sum) / n < min_above_gray) ++sum;
+      min_above_sum[n] = sum;
+    }
+  }
   std::vector<int> scan_x;
   for (int x = edges.x0 + half; x < edges.x0 + edges.width - half; x += p.scan_step_px) scan_x.push_back(x);
   const int columns = static_cast<int>(scan_x.size());
   // The median of the 2·half+1 responses around a pixel exceeds the threshold when more than
-  // half of them do: `majority`, row-major as the mask, on the scanned rows (all but the region's
-  // first and last) and zero elsewhere.
+  // half of them do: `majority`, one bit per pixel (bit x % 64 of word x / 64 of its row), on the
+  // scanned rows (all but the region's first and last) and zero elsewhere.
   const int w = edges.width, m = p.silhouette_min_rows;
-  std::vector<std::uint8_t> majority(edges.on.size(), 0);
-  for (int r = 1; r + 1 < edges.height; ++r) {
-    const std::uint8_t* row = &edges.on[static_cast<std::size_t>(r) * w];
-    std::uint8_t* out_row = &majority[static_cast<std::size_t>(r) * w];
-    if (half == 1) {
-      for (int x = 1; x + 1 < w; ++x) out_row[x] = row[x - 1] + row[x] + row[x + 1] >= 2;
-    } else {
+  const int words = (w + 63) / 64;
+  std::vector<std::uint64_t> majority(static_cast<std::size_t>(edges.height) * words, 0);
+  // Bit x of the result is byte x of bytes[0, count) (each 0 or 1).
+  auto packBits = [](const std::uint8_t* bytes, int count, std::uint64_t* out) {
+    // Byte i of eight (each 0 or 1) lands on bit 56 + i of the product, no two partial products
+    // overlap: the eight bits in its top byte.
+    auto eightBits = [](std::uint64_t eight) { return (eight * 0x0102040810204080ULL) >> 56; };
+    const int whole = count / 8;  // bytes 8·i .. 8·i+7 all inside
+    for (int k = 0; 64 * k < count; ++k) {
+      std::uint64_t word = 0;
+      const int end = std::min(whole, 8 * k + 8);
+      for (int i = 8 * k; i < end; ++i) {
+        std::uint64_t eight;
+        std::memcpy(&eight, bytes + 8 * i, 8);
+        word |= eightBits(eight) << (8 * (i % 8));
+      }
+      out[k] = word;
+    }
+    if (count % 8 != 0) {
+      std::uint64_t eight = 0;
+      for (int j = 0; j < count % 8; ++j)
+        eight |= static_cast<std::uint64_t>(bytes[8 * whole + j]) << (8 * j);
+      out[whole / 8] |= eightBits(eight) << (8 * (whole % 8));
+    }
+  };
+  if (half == 1) {
+    // The median of three: two of the pixel and its two neighbours, on columns 1 .. w-2.
+    std::vector<std::uint64_t> on(words);
+    const std::uint64_t last_bit = std::uint64_t{1} << ((w - 1) % 64);
+    for (int r = 1; r + 1 < edges.height; ++r) {
+      packBits(&edges.on[static_cast<std::size_t>(r) * w], w, on.data());
+      std::uint64_t* out_row = &majority[static_cast<std::size_t>(r) * words];
+      for (int k = 0; k < words; ++k) {
+        const std::uint64_t b = on[k];
+        const std::uint64_t left = (b << 1) | (k > 0 ? on[k - 1] >> 63 : 0);           // bit x: x-1
+        const std::uint64_t right = (b >> 1) | (k + 1 < words ? on[k + 1] << 63 : 0);  // bit x: x+1
+        out_row[k] = (left & b) | (left & right) | (b & right);
+      }
+      out_row[0] &= ~std::uint64_t{1};
+      out_row[words - 1] &= ~last_bit;
+    }
+  } else {
+    std::vector<std::uint8_t> out_row(w);
+    for (int r = 1; r + 1 < edges.height; ++r) {
+      const std::uint8_t* row = &edges.on[static_cast<std::size_t>(r) * w];
+      std::fill(out_row.begin(), out_row.end(), 0);
       int on = 0;
       for (int x = 0; x < 2 * half; ++x) on += row[x];
       for (int x = half; x + half < w; ++x) {
@@ -391,50 +509,56 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
         out_row[x] = on > half;
         on -= row[x - half];
       }
+      packBits(out_row.data(), w, &majority[static_cast<std::size_t>(r) * words]);
     }
   }
   // Scanning a line bottom-up, an edge is where the run of majority rows reaches m: rows r .. r+m-1
-  // on and the row below them off (or not scanned). All scan lines together, row by row.
+  // on and the row below them off (or not scanned). All scan lines together, row by row, 64
+  // columns a word.
   std::vector<int> found(columns, 0);
   std::vector<Hit> column_hits(static_cast<std::size_t>(columns) * kMaxHits);
-  // Padded by 8 zero bytes: each 8-byte word below is read whole.
-  std::vector<std::uint8_t> start(static_cast<std::size_t>(w) + 8, 0);
   // The scan line of each mask column, -1 where none is.
   std::vector<int> column_of(w, -1);
+  for (int c = 0; c < columns; ++c) column_of[half + c * p.scan_step_px] = c;
+  // The columns still scanned (a scan line and fewer than kMaxHits edges on it), 64 a word.
+  std::vector<std::uint64_t> open_bits(words, 0);
   for (int x = 0; x < w; ++x) {
-    if ((x - half) % p.scan_step_px != 0) continue;
-    const int c = (x - half) / p.scan_step_px;
-    if (c >= 0 && c < columns) column_of[x] = c;
+    if (column_of[x] >= 0) open_bits[x / 64] |= std::uint64_t{1} << (x % 64);
   }
   int open = columns;
+  std::array<const std::uint8_t*, 16> above{};
   for (int r = edges.height - 1 - m; r >= 1 && open > 0; --r) {
-    const std::uint8_t* below = &majority[static_cast<std::size_t>(r + m) * w];
-    const std::uint8_t* first = &majority[static_cast<std::size_t>(r) * w];
-    if (m == 2) {
-      for (int x = 0; x < w; ++x) start[x] = first[x] & first[x + w] & (below[x] ^ 1);
-    } else {
-      for (int x = 0; x < w; ++x) {
-        std::uint8_t all = below[x] ^ 1;
-        for (int k = 0; k < m; ++k) all &= first[static_cast<std::size_t>(k) * w + x];
-        start[x] = all;
-      }
-    }
-    // The few starts, eight bytes at a time past the empty stretches.
+    const std::uint64_t* below = &majority[static_cast<std::size_t>(r + m) * words];
+    const std::uint64_t* first = &majority[static_cast<std::size_t>(r) * words];
     const int y = edges.y0 + r;
-    for (int x0 = 0; x0 < w; x0 += 8) {
-      std::uint64_t word = 0;
-      std::memcpy(&word, &start[x0], 8);
-      if (word == 0) continue;
-      for (int x = x0; x < std::min(w, x0 + 8); ++x) {
-        if (!start[x]) continue;
-        const int c = column_of[x];
-        if (c < 0 || found[c] == kMaxHits) continue;
-        if (min_above_gray > 0 && aboveGray(scan_x[c], y) < min_above_gray) continue;
+    // The rows the edge test averages (those inside the image) and the least passing sum.
+    const int n_above = min_above_gray > 0 ? std::min(above_rows, y) : 0;
+    for (int i = 0; i < n_above; ++i) above[i] = image.row(y - 1 - i);
+    const int min_sum = min_above_gray > 0 ? min_above_sum[n_above] : 0;
+    for (int k = 0; k < words; ++k) {
+      std::uint64_t start = ~below[k];
+      for (int j = 0; j < m; ++j) start &= first[static_cast<std::size_t>(j) * words + k];
+      // Without branches on the data: a start that fails the test writes its hit where the
+      // column's next one goes, and the count does not move.
+      for (start &= open_bits[k]; start != 0; start &= start - 1) {
+        const int bit = __builtin_ctzll(start);
+        const int c = column_of[64 * k + bit];
+        int sum = 0;
+        for (int i = 0; i < n_above; ++i) sum += above[i][scan_x[c]];
         column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y + m - 1};
-        if (++found[c] == kMaxHits) --open;
+        found[c] += static_cast<int>(sum >= min_sum);
+        const bool full = found[c] == kMaxHits;
+        open_bits[k] &= ~(static_cast<std::uint64_t>(full) << bit);
+        open -= static_cast<int>(full);
       }
     }
   }
+  int hit_count = 0;
+  for (int c = 0; c < columns; ++c) hit_count += found[c];
+  hits.reserve(hit_count);
+  first_hit.reserve(static_cast<std::size_t>(columns) + 1);
+  out.silhouette_px.reserve(columns);
+  out.silhouette_in_robot.reserve(columns);
   for (int c = 0; c < columns; ++c) {
     first_hit.push_back(static_cast<int>(hits.size()));
     for (int k = 0; k < found[c]; ++k) hits.push_back(column_hits[static_cast<std::size_t>(c) * kMaxHits + k]);

@@ -52,14 +52,19 @@ int countLineVotes(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
   return votes;
 }
 
-std::vector<Eigen::Vector2d> lineVoters(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                                        const std::vector<Eigen::Vector2d>& points,
-                                        double max_distance, double margin, double max_gap) {
+namespace {
+// lineVoters' work: the voters along the line into `voters` (reused, so the hull edges' votes
+// allocate once), their longest run is [begin, end).
+void voterRun(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+              const std::vector<Eigen::Vector2d>& points, double max_distance, double margin,
+              double max_gap, std::vector<std::pair<double, Eigen::Vector2d>>& voters,
+              std::size_t& best_begin, std::size_t& best_end) {
+  voters.clear();
+  best_begin = best_end = 0;
   const Eigen::Vector2d d = b - a;
   const double length = d.norm();
-  if (length <= 0) return {};
+  if (length <= 0) return;
   const Eigen::Vector2d u = d / length;
-  std::vector<std::pair<double, Eigen::Vector2d>> voters;
   for (const auto& p : points) {
     const Eigen::Vector2d ap = p - a;
     const double along = ap.dot(u);
@@ -67,9 +72,15 @@ std::vector<Eigen::Vector2d> lineVoters(const Eigen::Vector2d& a, const Eigen::V
     if (across <= max_distance && along >= -margin && along <= length + margin)
       voters.emplace_back(along, p);
   }
-  std::stable_sort(voters.begin(), voters.end(),
-                   [](const auto& p, const auto& q) { return p.first < q.first; });
-  std::size_t best_begin = 0, best_end = voters.size();
+  // Along the line, ties in the points' order (as std::stable_sort): an insertion sort, the
+  // points come nearly in order (scan line by scan line) and the sort allocates nothing.
+  for (std::size_t i = 1; i < voters.size(); ++i) {
+    const auto v = voters[i];
+    std::size_t j = i;
+    for (; j > 0 && v.first < voters[j - 1].first; --j) voters[j] = voters[j - 1];
+    voters[j] = v;
+  }
+  best_end = voters.size();
   if (max_gap > 0 && !voters.empty()) {
     best_end = 0;
     for (std::size_t begin = 0, i = 1; i <= voters.size(); ++i) {
@@ -81,7 +92,17 @@ std::vector<Eigen::Vector2d> lineVoters(const Eigen::Vector2d& a, const Eigen::V
       begin = i;
     }
   }
+}
+}  // namespace
+
+std::vector<Eigen::Vector2d> lineVoters(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                        const std::vector<Eigen::Vector2d>& points,
+                                        double max_distance, double margin, double max_gap) {
+  std::vector<std::pair<double, Eigen::Vector2d>> voters;
+  std::size_t best_begin = 0, best_end = 0;
+  voterRun(a, b, points, max_distance, margin, max_gap, voters, best_begin, best_end);
   std::vector<Eigen::Vector2d> out;
+  out.reserve(best_end - best_begin);
   for (std::size_t i = best_begin; i < best_end; ++i) out.push_back(voters[i].second);
   return out;
 }
@@ -92,6 +113,9 @@ SilhouetteLines findSilhouetteLines(const std::vector<Eigen::Vector2d>& points,
   const std::vector<Eigen::Vector2d> hull = convexHull(points);
   if (hull.size() < 2) return out;
   std::vector<LineHypothesis> candidates;
+  candidates.reserve(hull.size());
+  std::vector<std::pair<double, Eigen::Vector2d>> voters;
+  voters.reserve(points.size());
   const std::size_t edges = hull.size() == 2 ? 1 : hull.size();
   for (std::size_t i = 0; i < edges; ++i) {
     LineHypothesis h;
@@ -107,13 +131,14 @@ SilhouetteLines findSilhouetteLines(const std::vector<Eigen::Vector2d>& points,
     const double length = d.norm();
     if (bounds.max_voter_gap > 0) {
       // The extent and votes of the voters' longest contiguous run.
-      const std::vector<Eigen::Vector2d> voters = lineVoters(
-          h.a, h.b, points, bounds.vote_distance, bounds.vote_margin, bounds.max_voter_gap);
-      if (voters.size() < 2) continue;  // no line: the edge joins two lone points
-      h.votes = static_cast<int>(voters.size());
+      std::size_t begin = 0, end = 0;
+      voterRun(h.a, h.b, points, bounds.vote_distance, bounds.vote_margin, bounds.max_voter_gap,
+               voters, begin, end);
+      if (end - begin < 2) continue;  // no line: the edge joins two lone points
+      h.votes = static_cast<int>(end - begin);
       const Eigen::Vector2d u = d / length, a = h.a;
-      h.a = a + (voters.front() - a).dot(u) * u;
-      h.b = a + (voters.back() - a).dot(u) * u;
+      h.a = a + (voters[begin].second - a).dot(u) * u;
+      h.b = a + (voters[end - 1].second - a).dot(u) * u;
       candidates.push_back(h);
       continue;
     }
