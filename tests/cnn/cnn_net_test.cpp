@@ -248,6 +248,35 @@ TEST(CnnPatch, SameAsThePixelByPixelBilinearSample) {
   }
 }
 
+TEST(CnnPatch, StandardisesWithSixteenPartialSumsOfRoundedSquares) {
+  // The partial sums written out (a square rounded before it is added: no fused multiply-add);
+  // patch sizes without a tail, whose last values the compiler may sum either way.
+  std::mt19937 rng(12);
+  for (const int count : {16, 144, 576}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<float> values(count);
+      for (float& v : values) v = static_cast<float>(rng() % 16711681) / 65536.0f;
+      float sum[16] = {}, sum_sq[16] = {};
+      for (int i = 0; i < count; ++i) {
+        volatile float square = values[i] * values[i];
+        sum[i % 16] += values[i];
+        sum_sq[i % 16] += square;
+      }
+      float total = 0, total_sq = 0;
+      for (int k = 0; k < 16; ++k) total += sum[k], total_sq += sum_sq[k];
+      std::vector<float> out = values;
+      normalizePatch(out.data(), count, PatchNormalization::kStandardize);
+      // The mean and deviation from those sums, as normalizePatch computes them.
+      const float mean = total / count;
+      const float var = std::max(0.0f, total_sq / count - mean * mean);
+      const float inv = 1.0f / std::max(std::sqrt(var), kMinStddev);
+      for (int i = 0; i < count; ++i) {
+        ASSERT_EQ(out[i], (values[i] - mean) * inv) << count << " " << trial << " " << i;
+      }
+    }
+  }
+}
+
 TEST(CnnClassifier, SinglePatchesAndBatchesGiveTheSameProbabilities) {
   Net net = readDarknetCfg(model("ori_net.cfg"));
   net.initialise(2);
