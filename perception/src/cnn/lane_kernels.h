@@ -112,12 +112,39 @@ inline void convAtFixed(const Layer& l, const float* wb, const float* bias, int 
   }
 }
 
-// convAtFixed for the shipped nets' kernel sides (1, 3, 5), convAt for any other.
+// convAtFixed where the kernel lies wholly inside the input: no bounds at all.
+template <int NB, int K, int CF>
+inline void convAtInside(const float* wb, const float* bias, int o0, const Vec* in, int Win,
+                         int channels, int iy0, int ix0, Vec* acc) {
+  const int C = CF > 0 ? CF : channels;
+  for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
+  const Vec* base = in + (static_cast<std::size_t>(iy0) * Win + ix0) * C;
+  for (int ky = 0; ky < K; ++ky) {
+    const Vec* row = base + static_cast<std::size_t>(ky) * Win * C;
+    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
+    for (int kx = 0; kx < K; ++kx) {
+      const Vec* px = row + kx * C;
+      const float* wk = wrow + kx * C * NB * kWeightWidth;
+      for (int c = 0; c < C; ++c) {
+        const Vec v = px[c];
+        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + (c * NB + j) * kWeightWidth) * v;
+      }
+    }
+  }
+}
+
+// convAtFixed for the shipped nets' kernel sides (1, 3, 5), without bounds inside the input;
+// convAt for any other side.
 template <int NB, int K, int CF>
 inline void convAtAny(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
                       int oy, int ox, Vec* acc) {
   if constexpr (K > 0) {
-    convAtFixed<NB, K, CF>(l, wb, bias, o0, in, oy, ox, acc);
+    const int iy0 = oy * l.stride - l.pad, ix0 = ox * l.stride - l.pad;
+    if (iy0 >= 0 && ix0 >= 0 && iy0 + K <= l.in.height && ix0 + K <= l.in.width) {
+      convAtInside<NB, K, CF>(wb, bias, o0, in, l.in.width, l.in.channels, iy0, ix0, acc);
+    } else {
+      convAtFixed<NB, K, CF>(l, wb, bias, o0, in, oy, ox, acc);
+    }
   } else {
     convAt<NB>(l, wb, bias, o0, in, oy, ox, acc);
   }
