@@ -1,9 +1,11 @@
 // Darknet cfg/weights reading and writing, the shipped nets' sizes, bad model files, patches.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "colorfree/perception/cnn/classifier.h"
 #include "colorfree/perception/cnn/net.h"
@@ -202,6 +204,77 @@ TEST(CnnPatch, ExtractsAndNormalises) {
         extractPatch(image.view(), {0, 0, 0, 8}, 8, 8, PatchNormalization::kUnitRange, out);
       },
       {"positive size"});
+}
+
+// The bilinear sample of extractPatch written out pixel by pixel (horizontal blend first, in
+// 1/256 steps), before the scaling to 0..1.
+float referenceSample(const GrayImage& image, const PatchBox& box, int width, int height, int u,
+                      int v) {
+  const float sx = box.width_px / width, sy = box.height_px / height;
+  float x = std::clamp(box.x_px + (u + 0.5f) * sx - 0.5f, 0.0f, image.width() - 1.0f);
+  const float y = std::clamp(box.y_px + (v + 0.5f) * sy - 0.5f, 0.0f, image.height() - 1.0f);
+  int x0 = static_cast<int>(x);
+  int fx = static_cast<int>((x - x0) * 256.0f + 0.5f);
+  if (x0 + 1 >= image.width()) x0 = image.width() - 2, fx = 256;
+  const int y0 = static_cast<int>(y), y1 = std::min(y0 + 1, image.height() - 1);
+  const int fy = static_cast<int>((y - y0) * 256.0f + 0.5f);
+  const auto at = [&](int xx, int yy) { return static_cast<int>(image.at(xx, yy)); };
+  const int top = at(x0, y0) * 256 + (at(x0 + 1, y0) - at(x0, y0)) * fx;
+  const int bottom = at(x0, y1) * 256 + (at(x0 + 1, y1) - at(x0, y1)) * fx;
+  return static_cast<float>(top * 256 + (bottom - top) * fy) / 65536.0f;
+}
+
+TEST(CnnPatch, SameAsThePixelByPixelBilinearSample) {
+  // Random pixels, boxes shrunk and enlarged, inside, across and beyond the borders, patch
+  // widths with and without a remainder of the vector steps.
+  GrayImage image(97, 61);
+  std::mt19937 rng(11);
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) image.at(x, y) = static_cast<std::uint8_t>(rng());
+  }
+  std::uniform_real_distribution<float> pos(-30.0f, 110.0f), size(1.0f, 120.0f);
+  const int sides[] = {5, 8, 12, 13, 24, 26, 31};
+  std::vector<float> out(31 * 31);
+  for (int trial = 0; trial < 300; ++trial) {
+    const PatchBox box{pos(rng), pos(rng) * 0.6f, size(rng), size(rng)};
+    const int w = sides[trial % 7], h = sides[(trial / 7) % 7];
+    extractPatch(image.view(), box, w, h, PatchNormalization::kUnitRange, out.data());
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        ASSERT_EQ(out[v * w + u], referenceSample(image, box, w, h, u, v) * (1.0f / 255.0f))
+            << "trial " << trial << " u " << u << " v " << v;
+      }
+    }
+  }
+}
+
+TEST(CnnPatch, StandardisesWithSixteenPartialSumsOfRoundedSquares) {
+  // The partial sums written out (a square rounded before it is added: no fused multiply-add);
+  // patch sizes without a tail, whose last values the compiler may sum either way.
+  std::mt19937 rng(12);
+  for (const int count : {16, 144, 576}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<float> values(count);
+      for (float& v : values) v = static_cast<float>(rng() % 16711681) / 65536.0f;
+      float sum[16] = {}, sum_sq[16] = {};
+      for (int i = 0; i < count; ++i) {
+        volatile float square = values[i] * values[i];
+        sum[i % 16] += values[i];
+        sum_sq[i % 16] += square;
+      }
+      float total = 0, total_sq = 0;
+      for (int k = 0; k < 16; ++k) total += sum[k], total_sq += sum_sq[k];
+      std::vector<float> out = values;
+      normalizePatch(out.data(), count, PatchNormalization::kStandardize);
+      // The mean and deviation from those sums, as normalizePatch computes them.
+      const float mean = total / count;
+      const float var = std::max(0.0f, total_sq / count - mean * mean);
+      const float inv = 1.0f / std::max(std::sqrt(var), kMinStddev);
+      for (int i = 0; i < count; ++i) {
+        ASSERT_EQ(out[i], (values[i] - mean) * inv) << count << " " << trial << " " << i;
+      }
+    }
+  }
 }
 
 TEST(CnnClassifier, SinglePatchesAndBatchesGiveTheSameProbabilities) {

@@ -85,20 +85,98 @@ inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, c
   }
 }
 
+// convAt with the kernel side K (and, when CF > 0, the input channels) known at compile time:
+// the same products summed in the same order (the taps outside the input left out, not added
+// as zeros), in loops the compiler unrolls. CF = 0: the layer's channels, counted at run time.
+template <int NB, int K, int CF>
+inline void convAtFixed(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
+                        int oy, int ox, Vec* acc) {
+  const int C = CF > 0 ? CF : l.in.channels, Hin = l.in.height, Win = l.in.width;
+  const int iy0 = oy * l.stride - l.pad, ix0 = ox * l.stride - l.pad;
+  const int ky0 = std::max(0, -iy0), ky1 = std::min(K, Hin - iy0);
+  const int kx0 = std::max(0, -ix0), kx1 = std::min(K, Win - ix0);
+  for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
+  for (int ky = 0; ky < K; ++ky) {
+    if (ky < ky0 || ky >= ky1) continue;
+    const Vec* row = in + (static_cast<std::ptrdiff_t>(iy0 + ky) * Win + ix0) * C;
+    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
+    for (int kx = 0; kx < K; ++kx) {
+      if (kx < kx0 || kx >= kx1) continue;
+      const Vec* px = row + kx * C;
+      const float* wk = wrow + kx * C * NB * kWeightWidth;
+      for (int c = 0; c < C; ++c) {
+        const Vec v = px[c];
+        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + (c * NB + j) * kWeightWidth) * v;
+      }
+    }
+  }
+}
+
+// convAtFixed where the kernel lies wholly inside the input: no bounds at all.
+template <int NB, int K, int CF>
+inline void convAtInside(const float* wb, const float* bias, int o0, const Vec* in, int Win,
+                         int channels, int iy0, int ix0, Vec* acc) {
+  const int C = CF > 0 ? CF : channels;
+  for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
+  const Vec* base = in + (static_cast<std::size_t>(iy0) * Win + ix0) * C;
+  for (int ky = 0; ky < K; ++ky) {
+    const Vec* row = base + static_cast<std::size_t>(ky) * Win * C;
+    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
+    for (int kx = 0; kx < K; ++kx) {
+      const Vec* px = row + kx * C;
+      const float* wk = wrow + kx * C * NB * kWeightWidth;
+      for (int c = 0; c < C; ++c) {
+        const Vec v = px[c];
+        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + (c * NB + j) * kWeightWidth) * v;
+      }
+    }
+  }
+}
+
+// convAtFixed for the shipped nets' kernel sides (1, 3, 5), without bounds inside the input;
+// convAt for any other side.
+template <int NB, int K, int CF>
+inline void convAtAny(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
+                      int oy, int ox, Vec* acc) {
+  if constexpr (K > 0) {
+    const int iy0 = oy * l.stride - l.pad, ix0 = ox * l.stride - l.pad;
+    if (iy0 >= 0 && ix0 >= 0 && iy0 + K <= l.in.height && ix0 + K <= l.in.width) {
+      convAtInside<NB, K, CF>(wb, bias, o0, in, l.in.width, l.in.channels, iy0, ix0, acc);
+    } else {
+      convAtFixed<NB, K, CF>(l, wb, bias, o0, in, oy, ox, acc);
+    }
+  } else {
+    convAt<NB>(l, wb, bias, o0, in, oy, ox, acc);
+  }
+}
+
+// Calls f.template operator()<K, CF>() with the layer's kernel side as a constant where it is one
+// of the shipped nets' (1, 3, 5; one input channel as well for 3), else with K = 0.
+template <typename F>
+inline void withKernel(const Layer& l, F&& f) {
+  if (l.size == 3 && l.in.channels == 1) return f.template operator()<3, 1>();
+  if (l.size == 3) return f.template operator()<3, 0>();
+  if (l.size == 1) return f.template operator()<1, 0>();
+  if (l.size == 5) return f.template operator()<5, 0>();
+  f.template operator()<0, 0>();
+}
+
 // `out` may be a slice of a wider buffer (a route's concatenation): `O` channels per pixel.
 template <int NB>
 inline void convBlock(const Layer& l, const float* w, const float* bias, int o0, const Vec* in,
                       Vec* out, int O) {
   const float* wb =
       w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
-  for (int oy = 0; oy < l.out.height; ++oy) {
-    for (int ox = 0; ox < l.out.width; ++ox) {
-      Vec acc[NB];
-      convAt<NB>(l, wb, bias, o0, in, oy, ox, acc);
-      Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * O + o0;
-      for (int j = 0; j < NB; ++j) po[j] = activate(acc[j], l.activation);
+  withKernel(l, [&]<int K, int CF>() {
+    for (int oy = 0; oy < l.out.height; ++oy) {
+      for (int ox = 0; ox < l.out.width; ++ox) {
+        Vec acc[NB];
+        convAtAny<NB, K, CF>(l, wb, bias, o0, in, oy, ox, acc);
+        Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * O + o0;
+        for (int j = 0; j < NB; ++j) po[j] = activate(acc[j], l.activation);
+      }
     }
-  }
+  });
 }
 
 // A convolution followed by a max pool, without storing the convolution's output: the
@@ -109,25 +187,27 @@ inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, con
   const float* wb =
       w + static_cast<std::size_t>(o0) * l.size * l.size * l.in.channels * kWeightWidth;
   const int off = -pool.pad / 2;
-  for (int py = 0; py < pool.out.height; ++py) {
-    const int cy0 = py * pool.stride + off;
-    const int y0 = std::max(0, cy0), y1 = std::min(l.out.height, cy0 + pool.size);
-    for (int px = 0; px < pool.out.width; ++px) {
-      const int cx0 = px * pool.stride + off;
-      const int x0 = std::max(0, cx0), x1 = std::min(l.out.width, cx0 + pool.size);
-      Vec best[NB];
-      for (int j = 0; j < NB; ++j) best[j] = splat(-std::numeric_limits<float>::infinity());
-      for (int y = y0; y < y1; ++y) {
-        for (int x = x0; x < x1; ++x) {
-          Vec acc[NB];
-          convAt<NB>(l, wb, bias, o0, in, y, x, acc);
-          for (int j = 0; j < NB; ++j) best[j] = acc[j] > best[j] ? acc[j] : best[j];
+  withKernel(l, [&]<int K, int CF>() {
+    for (int py = 0; py < pool.out.height; ++py) {
+      const int cy0 = py * pool.stride + off;
+      const int y0 = std::max(0, cy0), y1 = std::min(l.out.height, cy0 + pool.size);
+      for (int px = 0; px < pool.out.width; ++px) {
+        const int cx0 = px * pool.stride + off;
+        const int x0 = std::max(0, cx0), x1 = std::min(l.out.width, cx0 + pool.size);
+        Vec best[NB];
+        for (int j = 0; j < NB; ++j) best[j] = splat(-std::numeric_limits<float>::infinity());
+        for (int y = y0; y < y1; ++y) {
+          for (int x = x0; x < x1; ++x) {
+            Vec acc[NB];
+            convAtAny<NB, K, CF>(l, wb, bias, o0, in, y, x, acc);
+            for (int j = 0; j < NB; ++j) best[j] = acc[j] > best[j] ? acc[j] : best[j];
+          }
         }
+        Vec* po = out + (static_cast<std::size_t>(py) * pool.out.width + px) * O + o0;
+        for (int j = 0; j < NB; ++j) po[j] = activate(best[j], l.activation);
       }
-      Vec* po = out + (static_cast<std::size_t>(py) * pool.out.width + px) * O + o0;
-      for (int j = 0; j < NB; ++j) po[j] = activate(best[j], l.activation);
     }
-  }
+  });
 }
 
 template <int NB>

@@ -1,5 +1,11 @@
 #include "lane_runner.h"
 
+#include <cstring>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
 namespace colorfree::cnn::detail {
 
 void packWeights(const Layer& l, const float* params, float* packed) {
@@ -125,6 +131,38 @@ void LaneRunner::repack() {
   }
 }
 
+#if defined(__AVX512F__)
+namespace {
+// r[i][j] becomes r[j][i].
+inline void transpose16(__m512* r) {
+  __m512 t[16];
+  for (int i = 0; i < 16; i += 2) {
+    t[i] = _mm512_unpacklo_ps(r[i], r[i + 1]);
+    t[i + 1] = _mm512_unpackhi_ps(r[i], r[i + 1]);
+  }
+  for (int i = 0; i < 16; i += 4) {
+    for (int k = 0; k < 2; ++k) {
+      r[i + 2 * k] = _mm512_castpd_ps(
+          _mm512_unpacklo_pd(_mm512_castps_pd(t[i + k]), _mm512_castps_pd(t[i + 2 + k])));
+      r[i + 2 * k + 1] = _mm512_castpd_ps(
+          _mm512_unpackhi_pd(_mm512_castps_pd(t[i + k]), _mm512_castps_pd(t[i + 2 + k])));
+    }
+  }
+  // Now r[4g + m] holds, in its 128-bit lane L, column 4L + m of rows 4g .. 4g + 3.
+  for (int i = 0; i < 16; i += 8) {
+    for (int k = 0; k < 4; ++k) {
+      t[i + k] = _mm512_shuffle_f32x4(r[i + k], r[i + 4 + k], 0x88);
+      t[i + 4 + k] = _mm512_shuffle_f32x4(r[i + k], r[i + 4 + k], 0xdd);
+    }
+  }
+  for (int k = 0; k < 8; ++k) {
+    r[k] = _mm512_shuffle_f32x4(t[k], t[k + 8], 0x88);
+    r[k + 8] = _mm512_shuffle_f32x4(t[k], t[k + 8], 0xdd);
+  }
+}
+}  // namespace
+#endif
+
 void LaneRunner::setInput(const float* samples, int count) {
   const Shape& s = net_.input();
   const int plane = s.height * s.width, C = s.channels, n = s.size();
@@ -133,7 +171,24 @@ void LaneRunner::setInput(const float* samples, int count) {
   for (int b = 0; b < kLanes; ++b)
     src[b] = samples + static_cast<std::size_t>(std::min(b, count - 1)) * n;
   for (int c = 0; c < C; ++c) {
-    for (int p = 0; p < plane; ++p) {
+    int p = 0;
+#if defined(__AVX512F__)
+    // 16 positions of the 16 samples at a time: a 16x16 transpose in registers.
+    if constexpr (kLanes == 16) {
+      for (; p + 16 <= plane; p += 16) {
+        __m512 r[16];
+        for (int b = 0; b < 16; ++b) {
+          r[b] = b < count ? _mm512_loadu_ps(src[b] + c * plane + p) : _mm512_setzero_ps();
+        }
+        transpose16(r);
+        for (int k = 0; k < 16; ++k) {
+          std::memcpy(static_cast<void*>(&input_[static_cast<std::size_t>(p + k) * C + c]), &r[k],
+                      sizeof(Vec));
+        }
+      }
+    }
+#endif
+    for (; p < plane; ++p) {
       Vec v;
       for (int b = 0; b < kLanes; ++b) v[b] = b < count ? src[b][c * plane + p] : 0.0f;
       input_[static_cast<std::size_t>(p) * C + c] = v;
