@@ -66,6 +66,28 @@ CnsRegion clampRegion(const GrayView& image, int x0, int y0, int width, int heig
   return r;
 }
 
+// The region grown by `border` px on every side, copied with reads clamped to the image (pw ×
+// ph values, row by row), so the loops over it need no checks.
+template <typename T>
+std::vector<T> paddedRegion(const GrayView& image, const CnsRegion& r, int border) {
+  const int pw = r.width + 2 * border, ph = r.height + 2 * border;
+  std::vector<T> pix(static_cast<std::size_t>(pw) * ph);
+  std::vector<int> col(pw);
+  for (int i = 0; i < pw; ++i) col[i] = std::clamp(r.x0 - border + i, 0, image.width - 1);
+  // Columns i_lo .. i_hi-1 need no clamping: a plain copy.
+  const int i_lo = std::min(pw, std::max(0, border - r.x0));
+  const int i_hi = std::max(i_lo, std::min(pw, image.width - r.x0 + border));
+  for (int j = 0; j < ph; ++j) {
+    const std::uint8_t* src = image.row(std::clamp(r.y0 - border + j, 0, image.height - 1));
+    T* dst = &pix[static_cast<std::size_t>(j) * pw];
+    for (int i = 0; i < i_lo; ++i) dst[i] = src[col[i]];
+    const std::uint8_t* run = src + (r.x0 - border);
+    for (int i = i_lo; i < i_hi; ++i) dst[i] = run[i];
+    for (int i = i_hi; i < pw; ++i) dst[i] = src[col[i]];
+  }
+  return pix;
+}
+
 // The CNS's rows of a (non-empty) region: calls row(y, up, mid, down, vs, vs2) for each row y
 // (relative to the region), with up / mid / down the image rows y-1, y, y+1 from the region's
 // column 0 (reads clamped to the image, valid from column -1 to width) and vs, vs2 the sums of the
@@ -73,24 +95,10 @@ CnsRegion clampRegion(const GrayView& image, int x0, int y0, int width, int heig
 // column -radius to width-1+radius).
 template <typename RowFn>
 void forEachCnsRow(const GrayView& image, const CnsRegion& r, int radius, RowFn&& row_fn) {
-  // The region grown by a border (the variance window's radius, at least the Sobel's 1 px),
-  // copied once with reads clamped to the image: the loops read it without any checks.
+  // The region grown by a border (the variance window's radius, at least the Sobel's 1 px).
   const int border = std::max(radius, 1);
-  const int pw = r.width + 2 * border, ph = r.height + 2 * border;
-  std::vector<std::int32_t> pix(static_cast<std::size_t>(pw) * ph);
-  std::vector<int> col(pw);
-  for (int i = 0; i < pw; ++i) col[i] = std::clamp(r.x0 - border + i, 0, image.width - 1);
-  // Columns i_lo .. i_hi-1 need no clamping: a plain widening copy.
-  const int i_lo = std::min(pw, std::max(0, border - r.x0));
-  const int i_hi = std::max(i_lo, std::min(pw, image.width - r.x0 + border));
-  for (int j = 0; j < ph; ++j) {
-    const std::uint8_t* src = image.row(std::clamp(r.y0 - border + j, 0, image.height - 1));
-    std::int32_t* dst = &pix[static_cast<std::size_t>(j) * pw];
-    for (int i = 0; i < i_lo; ++i) dst[i] = src[col[i]];
-    const std::uint8_t* run = src + (r.x0 - border);
-    for (int i = i_lo; i < i_hi; ++i) dst[i] = run[i];
-    for (int i = i_hi; i < pw; ++i) dst[i] = src[col[i]];
-  }
+  const int pw = r.width + 2 * border;
+  const std::vector<std::int32_t> pix = paddedRegion<std::int32_t>(image, r, border);
   // The vertical sums per padded column, slid down row by row.
   std::vector<std::int32_t> vs(pw, 0), vs2(pw, 0);
   for (int j = border - radius; j <= border + radius; ++j) {
@@ -187,26 +195,10 @@ CnsEdgeMask brightAboveEdgeMask(const GrayView& image, int x0, int y0, int width
   }
   const CnsNormalizer norm(radius, sigma);
   const float t = static_cast<float>(threshold);
-  // The region grown by a border (the variance window's radius, at least the Sobel's 1 px),
-  // copied once with reads clamped to the image.
+  // The region grown by a border (the variance window's radius, at least the Sobel's 1 px).
   const int border = std::max(radius, 1);
-  const int w = r.width, pw = r.width + 2 * border, ph = r.height + 2 * border;
-  std::vector<std::uint8_t> pix(static_cast<std::size_t>(pw) * ph);
-  {
-    std::vector<int> col(pw);
-    for (int i = 0; i < pw; ++i) col[i] = std::clamp(r.x0 - border + i, 0, image.width - 1);
-    const int i_lo = std::min(pw, std::max(0, border - r.x0));
-    const int i_hi = std::max(i_lo, std::min(pw, image.width - r.x0 + border));
-    for (int j = 0; j < ph; ++j) {
-      const std::uint8_t* src = image.row(std::clamp(r.y0 - border + j, 0, image.height - 1));
-      std::uint8_t* dst = &pix[static_cast<std::size_t>(j) * pw];
-      for (int i = 0; i < i_lo; ++i) dst[i] = src[col[i]];
-      if (i_hi > i_lo)
-        std::memcpy(dst + i_lo, src + (r.x0 - border + i_lo),
-                    static_cast<std::size_t>(i_hi - i_lo));
-      for (int i = i_hi; i < pw; ++i) dst[i] = src[col[i]];
-    }
-  }
+  const int w = r.width, pw = r.width + 2 * border;
+  const std::vector<std::uint8_t> pix = paddedRegion<std::uint8_t>(image, r, border);
   // Each pixel's square once (at most 255², a 16-bit value), for the sums of squares.
   std::vector<std::uint16_t> pix2(pix.size());
   for (std::size_t i = 0; i < pix.size(); ++i)
