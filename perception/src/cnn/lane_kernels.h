@@ -60,47 +60,24 @@ void packWeights(const Layer& l, const float* params, float* packed);
 // Packed weights come in blocks of kBlock output channels (the last block may be smaller), the
 // channels of a block interleaved innermost: convolution [block][ky][kx][c][j], connected
 // [block][i][j], so one pointer walks all weights a register block needs.
-// Pre-activation sums of output channels o0..o0+NB at output pixel (oy, ox).
-template <int NB>
-inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
-                   int oy, int ox, Vec* acc) {
-  const int C = l.in.channels, Hin = l.in.height, Win = l.in.width;
-  const int K = l.size, S = l.stride, P = l.pad;
-  const int iy0 = oy * S - P;
-  const int ky0 = std::max(0, -iy0), ky1 = std::min(K, Hin - iy0);
-  const int ix0 = ox * S - P;
-  const int kx0 = std::max(0, -ix0), kx1 = std::min(K, Win - ix0);
-  for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
-  for (int ky = ky0; ky < ky1; ++ky) {
-    const Vec* row = in + (static_cast<std::size_t>(iy0 + ky) * Win + ix0) * C;
-    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
-    for (int kx = kx0; kx < kx1; ++kx) {
-      const Vec* px = row + kx * C;
-      const float* wk = wrow + kx * C * NB * kWeightWidth;
-      for (int c = 0; c < C; ++c) {
-        const Vec v = px[c];
-        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + (c * NB + j) * kWeightWidth) * v;
-      }
-    }
-  }
-}
-
-// convAt with the kernel side K (and, when CF > 0, the input channels) known at compile time:
-// the same products summed in the same order (the taps outside the input left out, not added
-// as zeros), in loops the compiler unrolls. CF = 0: the layer's channels, counted at run time.
+// Pre-activation sums of output channels o0..o0+NB from the taps ky0..ky1-1 × kx0..kx1-1 of the
+// kernel window whose top-left input pixel is (iy0, ix0); the taps outside the input are left
+// out, not added as zeros. K > 0: the kernel side as a compile-time constant (and, when CF > 0,
+// the input channels too), in loops the compiler unrolls; K = 0: the layer's side at run time.
+// Every caller sums the same products in the same order.
 template <int NB, int K, int CF>
-inline void convAtFixed(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
-                        int oy, int ox, Vec* acc) {
-  const int C = CF > 0 ? CF : l.in.channels, Hin = l.in.height, Win = l.in.width;
-  const int iy0 = oy * l.stride - l.pad, ix0 = ox * l.stride - l.pad;
-  const int ky0 = std::max(0, -iy0), ky1 = std::min(K, Hin - iy0);
-  const int kx0 = std::max(0, -ix0), kx1 = std::min(K, Win - ix0);
+__attribute__((always_inline)) inline void convTaps(const Layer& l, const float* wb,
+                                                    const float* bias, int o0, const Vec* in,
+                                                    int iy0, int ix0, int ky0, int ky1, int kx0,
+                                                    int kx1, Vec* acc) {
+  const int C = CF > 0 ? CF : l.in.channels, Win = l.in.width;
+  const int k = K > 0 ? K : l.size;
   for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
-  for (int ky = 0; ky < K; ++ky) {
+  for (int ky = 0; ky < k; ++ky) {
     if (ky < ky0 || ky >= ky1) continue;
     const Vec* row = in + (static_cast<std::ptrdiff_t>(iy0 + ky) * Win + ix0) * C;
-    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
-    for (int kx = 0; kx < K; ++kx) {
+    const float* wrow = wb + static_cast<std::size_t>(ky * k) * C * NB * kWeightWidth;
+    for (int kx = 0; kx < k; ++kx) {
       if (kx < kx0 || kx >= kx1) continue;
       const Vec* px = row + kx * C;
       const float* wk = wrow + kx * C * NB * kWeightWidth;
@@ -112,42 +89,21 @@ inline void convAtFixed(const Layer& l, const float* wb, const float* bias, int 
   }
 }
 
-// convAtFixed where the kernel lies wholly inside the input: no bounds at all.
+// Pre-activation sums of output channels o0..o0+NB at output pixel (oy, ox). Where a kernel of
+// a constant side lies wholly inside the input, the taps' bounds are constants too: no checks.
 template <int NB, int K, int CF>
-inline void convAtInside(const float* wb, const float* bias, int o0, const Vec* in, int Win,
-                         int channels, int iy0, int ix0, Vec* acc) {
-  const int C = CF > 0 ? CF : channels;
-  for (int j = 0; j < NB; ++j) acc[j] = splat(bias[o0 + j]);
-  const Vec* base = in + (static_cast<std::size_t>(iy0) * Win + ix0) * C;
-  for (int ky = 0; ky < K; ++ky) {
-    const Vec* row = base + static_cast<std::size_t>(ky) * Win * C;
-    const float* wrow = wb + static_cast<std::size_t>(ky * K) * C * NB * kWeightWidth;
-    for (int kx = 0; kx < K; ++kx) {
-      const Vec* px = row + kx * C;
-      const float* wk = wrow + kx * C * NB * kWeightWidth;
-      for (int c = 0; c < C; ++c) {
-        const Vec v = px[c];
-        for (int j = 0; j < NB; ++j) acc[j] += weight(wk + (c * NB + j) * kWeightWidth) * v;
-      }
-    }
-  }
-}
-
-// convAtFixed for the shipped nets' kernel sides (1, 3, 5), without bounds inside the input;
-// convAt for any other side.
-template <int NB, int K, int CF>
-inline void convAtAny(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
-                      int oy, int ox, Vec* acc) {
+inline void convAt(const Layer& l, const float* wb, const float* bias, int o0, const Vec* in,
+                   int oy, int ox, Vec* acc) {
+  const int k = K > 0 ? K : l.size, Hin = l.in.height, Win = l.in.width;
+  const int iy0 = oy * l.stride - l.pad, ix0 = ox * l.stride - l.pad;
   if constexpr (K > 0) {
-    const int iy0 = oy * l.stride - l.pad, ix0 = ox * l.stride - l.pad;
-    if (iy0 >= 0 && ix0 >= 0 && iy0 + K <= l.in.height && ix0 + K <= l.in.width) {
-      convAtInside<NB, K, CF>(wb, bias, o0, in, l.in.width, l.in.channels, iy0, ix0, acc);
-    } else {
-      convAtFixed<NB, K, CF>(l, wb, bias, o0, in, oy, ox, acc);
+    if (iy0 >= 0 && ix0 >= 0 && iy0 + K <= Hin && ix0 + K <= Win) {
+      convTaps<NB, K, CF>(l, wb, bias, o0, in, iy0, ix0, 0, K, 0, K, acc);
+      return;
     }
-  } else {
-    convAt<NB>(l, wb, bias, o0, in, oy, ox, acc);
   }
+  convTaps<NB, K, CF>(l, wb, bias, o0, in, iy0, ix0, std::max(0, -iy0), std::min(k, Hin - iy0),
+                      std::max(0, -ix0), std::min(k, Win - ix0), acc);
 }
 
 // Calls f.template operator()<K, CF>() with the layer's kernel side as a constant where it is one
@@ -171,7 +127,7 @@ inline void convBlock(const Layer& l, const float* w, const float* bias, int o0,
     for (int oy = 0; oy < l.out.height; ++oy) {
       for (int ox = 0; ox < l.out.width; ++ox) {
         Vec acc[NB];
-        convAtAny<NB, K, CF>(l, wb, bias, o0, in, oy, ox, acc);
+        convAt<NB, K, CF>(l, wb, bias, o0, in, oy, ox, acc);
         Vec* po = out + (static_cast<std::size_t>(oy) * l.out.width + ox) * O + o0;
         for (int j = 0; j < NB; ++j) po[j] = activate(acc[j], l.activation);
       }
@@ -199,7 +155,7 @@ inline void convPoolBlock(const Layer& l, const Layer& pool, const float* w, con
         for (int y = y0; y < y1; ++y) {
           for (int x = x0; x < x1; ++x) {
             Vec acc[NB];
-            convAtAny<NB, K, CF>(l, wb, bias, o0, in, y, x, acc);
+            convAt<NB, K, CF>(l, wb, bias, o0, in, y, x, acc);
             for (int j = 0; j < NB; ++j) best[j] = acc[j] > best[j] ? acc[j] : best[j];
           }
         }
