@@ -266,23 +266,38 @@ TEST(RobotProposer, FarRobotInTheUpperPartOfANearerBoxIsKept) {
       << "far feet " << far_feet.transpose() << describe(out);
 }
 
+// A near robot 0.8 m ahead and, drawn behind it, a farther one whose feet stand `right_widths`
+// of the near robot's widths to the right of its feet and `up_heights` of its heights above them.
+struct NearAndFarRobots {
+  GrayImage img;
+  Eigen::Vector2d near_feet, far_feet;
+  double near_h, far_h;
+};
+NearAndFarRobots drawNearAndFarRobots(const CameraModel& cam, std::uint64_t seed,
+                                      double right_widths, double up_heights) {
+  NearAndFarRobots s{carpet(seed), {}, {}, 0, 0};
+  const Eigen::Vector2d near_px = *cam.robotToPixel({0.8, 0.0, 0});
+  const auto [near_h, near_w] = robotSizePx(cam, near_px);
+  const auto far_ground =
+      cam.pixelToGround({near_px.x() + right_widths * near_w, near_px.y() - up_heights * near_h});
+  EXPECT_TRUE(far_ground.has_value());
+  s.far_feet = drawRobot(s.img, cam, far_ground.value_or(Eigen::Vector2d(3.0, 0.0)));
+  s.near_feet = drawRobot(s.img, cam, {0.8, 0.0});
+  s.near_h = near_h;
+  s.far_h = robotSizePx(cam, s.far_feet).h;
+  return s;
+}
+
 TEST(RobotProposer, FarRobotBesideANearOneAboveItsKneesIsKept) {
   // A far robot just beside a near one, its feet inside the near robot's (1.25 robots wide) box
   // and 0.45 of the near robot's height above its feet: above the knees and the hanging hands
   // (about a third of the height up), so no part of the near robot.
   const CameraModel cam = testCamera();
-  GrayImage img = carpet(9);
-  const Eigen::Vector2d near_px = *cam.robotToPixel({0.8, 0.0, 0});
-  const auto [near_h, near_w] = robotSizePx(cam, near_px);
-  const auto far_ground =
-      cam.pixelToGround({near_px.x() + 0.58 * near_w, near_px.y() - 0.45 * near_h});
-  ASSERT_TRUE(far_ground.has_value());
-  const Eigen::Vector2d far_feet = drawRobot(img, cam, *far_ground);
-  const Eigen::Vector2d near_feet = drawRobot(img, cam, {0.8, 0.0});
+  const auto [img, near_feet, far_feet, near_h, far_h] = drawNearAndFarRobots(cam, 9, 0.58, 0.45);
   const RobotProposals out = propose(img, cam);
   EXPECT_TRUE(proposedAt(out, near_feet, near_h))
       << "near feet " << near_feet.transpose() << describe(out);
-  EXPECT_TRUE(proposedAt(out, far_feet, robotSizePx(cam, far_feet).h))
+  EXPECT_TRUE(proposedAt(out, far_feet, far_h))
       << "far feet " << far_feet.transpose() << describe(out);
 }
 
@@ -292,15 +307,7 @@ TEST(RobotProposer, FarRobotInTheLowerPartOfANearerBoxIsHeldBack) {
   // held back behind the near one (the detector decides); with no room for held-back candidates
   // it is dropped as an overlap.
   const CameraModel cam = testCamera();
-  GrayImage img = carpet(10);
-  const Eigen::Vector2d near_px = *cam.robotToPixel({0.8, 0.0, 0});
-  const auto [near_h, near_w] = robotSizePx(cam, near_px);
-  const auto far_ground =
-      cam.pixelToGround({near_px.x() + 0.3 * near_w, near_px.y() - 0.25 * near_h});
-  ASSERT_TRUE(far_ground.has_value());
-  const Eigen::Vector2d far_feet = drawRobot(img, cam, *far_ground);
-  const Eigen::Vector2d near_feet = drawRobot(img, cam, {0.8, 0.0});
-  const double far_h = robotSizePx(cam, far_feet).h;
+  const auto [img, near_feet, far_feet, near_h, far_h] = drawNearAndFarRobots(cam, 10, 0.3, 0.25);
   const RobotProposals out = propose(img, cam);
   ASSERT_TRUE(proposedAt(out, near_feet, near_h)) << describe(out);
   EXPECT_FALSE(proposedAt(out, far_feet, far_h)) << describe(out);
