@@ -22,6 +22,8 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
   p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
   p.beside_width_factor = f.getInRange("beside_width_factor", 0, 10);
+  p.line_stripe_factor = f.getInRange("line_stripe_factor", 0, 100);
+  p.line_beside_width_factor = f.getInRange("line_beside_width_factor", 0, 10);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
   p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
@@ -51,12 +53,17 @@ const char* robotRejectReasonName(RobotRejectReason reason) {
     case RobotRejectReason::kAboveHorizon: return "above horizon";
     case RobotRejectReason::kOverlap: return "overlap";
     case RobotRejectReason::kTooMany: return "too many";
+    case RobotRejectReason::kFieldLine:
+      return "field line";
   }
   return "?";
 }
 
 RobotProposer::RobotProposer(RobotProposerParams params, FieldDimensions field)
-    : params_(params), robot_height_m_(field.robot_height_m), robot_width_m_(field.robot_width_m) {}
+    : params_(params),
+      robot_height_m_(field.robot_height_m),
+      robot_width_m_(field.robot_width_m),
+      line_width_m_(field.line_width_m) {}
 
 namespace {
 
@@ -135,25 +142,34 @@ struct RobotRun {
   int filled;  ///< its rows that differ from the carpet
 };
 
+// Whether a pixel is brighter than the reference, and, unless no_side, than the carpet beside it
+// to one side or the other as well (left_px to the left, right_px to the right; 0: that side is
+// outside the image).
+struct LitTest {
+  double ref, thr;
+  bool no_side;
+  int left_px, right_px;
+  bool operator()(const std::uint8_t* px) const {
+    const double d = *px;
+    return d - ref > thr && (no_side || (left_px > 0 && d - px[-left_px] > thr) ||
+                             (right_px > 0 && d - px[right_px] > thr));
+  }
+};
+
 // The run of a robot's pixels from row y (the lowest pixel brighter than the reference) up to
-// `needed` rows above the feet row; a carpet gap longer than max_gap ends it. A pixel brighter
-// than the reference counts when it is brighter than the carpet beside it, to one side or the
-// other, as well (left_px to the left, right_px to the right; 0: that side is outside the image;
-// no_side: no such test, as where the carpet is known), and one darker than the carpet (legs in
-// shade) where the carpet is known.
+// `needed` rows above the feet row; a carpet gap longer than max_gap ends it. A pixel counts when
+// it is lit (no_side: no test beside, as where the carpet is known), or darker than the carpet
+// (legs in shade) where the carpet is known.
 __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptrdiff_t stride,
-                                            int y, int feet_y, int needed, int max_gap, double ref,
-                                            double carpet, double thr, bool carpet_unknown,
-                                            bool no_side, int left_px, int right_px) {
-  const auto brighter_than_beside = [&](const std::uint8_t* px, double d) {
-    return no_side || (left_px > 0 && d - px[-left_px] > thr) ||
-           (right_px > 0 && d - px[right_px] > thr);
-  };
+                                            int y, int feet_y, int needed, int max_gap,
+                                            const LitTest& lit_test, double carpet,
+                                            bool carpet_unknown) {
+  const double thr = lit_test.thr;
   int run_top = y, gap = 0, filled = 0;
   const std::uint8_t* px = column + y * stride;
   for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy, px -= stride) {
     const double d = *px;
-    const bool lit = d - ref > thr && brighter_than_beside(px, d);
+    const bool lit = lit_test(px);
     const bool shaded = !carpet_unknown && carpet - d > thr;
     if (lit || shaded) {
       ++filled;
@@ -164,6 +180,43 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
     }
   }
   return {run_top, filled};
+}
+
+// The rows a field line line_width_m wide covers in the image with its near edge at `px` (0 where
+// the ground there is not seen).
+double linePx(const CameraModel& camera, const Eigen::Vector2d& px, double line_width_m) {
+  const auto near = camera.pixelToGround(px);
+  if (!near || near->norm() <= 0) return 0;
+  const Eigen::Vector2d far = *near + near->normalized() * line_width_m;
+  const auto far_px = camera.robotToPixel({far.x(), far.y(), 0});
+  return far_px ? std::max(0.0, px.y() - far_px->y()) : 0;
+}
+
+// Where a field line crosses a scan line in front of shade (a robot's shadow, a farther robot's
+// darker legs), the run from the line's lower edge takes the shade for legs in shade and reaches
+// the robot above: a box on the line. A lit stretch from row y up, no taller than
+// line_stripe_factor field-line widths seen there (line_px), with more than max_gap unlit rows
+// above it, and with lit pixels beside_px to its left or right within 0.3 beside_px of its rows
+// (a line runs on; feet end within their robot's width) is such a line. Returns the row above the
+// line, where the scan goes on; -1 when the stretch is no such line.
+int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int width, int y,
+                 int y_lo, int y_hi, const LitTest& lit, double line_px, int beside_px,
+                 int max_gap) {
+  int yy = y;
+  while (yy >= y_lo && lit(column + yy * stride)) --yy;
+  const int stripe_top = yy + 1;
+  if (y + 1 - stripe_top > line_px) return -1;
+  int unlit = 0;
+  for (; yy >= y_lo && unlit <= max_gap && !lit(column + yy * stride); --yy) ++unlit;
+  if (unlit <= max_gap) return -1;
+  const int slack = static_cast<int>(std::lround(0.3 * beside_px));
+  for (int dx : {-beside_px, beside_px}) {
+    if (x + dx < 0 || x + dx >= width) continue;
+    for (int r = std::max(y_lo, stripe_top - slack); r <= std::min(y_hi, y + slack); ++r) {
+      if (column[r * stride + dx] - lit.ref > lit.thr) return stripe_top - 1;
+    }
+  }
+  return -1;
 }
 
 double iou(const PixelBox& a, const PixelBox& b) {
@@ -260,13 +313,27 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
                                   : 0;
           const int x_left = x - side_px, x_right = x + side_px;
           const bool no_side = side_px <= 0 || (x_left < 0 && x_right >= image.width);
+          const LitTest lit{ref, thr, no_side, x_left >= 0 ? side_px : 0,
+                            x_right < image.width ? side_px : 0};
           const RobotRun run =
-              robotRun(column, stride, y, feet_y, needed, max_gap, ref, carpet, thr, carpet_unknown,
-                       no_side, x_left >= 0 ? side_px : 0, x_right < image.width ? side_px : 0);
+              robotRun(column, stride, y, feet_y, needed, max_gap, lit, carpet, carpet_unknown);
           const int run_top = run.top, filled = run.filled;
+          const bool long_enough = filled >= p.min_fill_fraction * needed;
+          const int above_line =
+              long_enough && p.line_stripe_factor > 0 && *expected >= p.min_expected_height_px
+                  ? rowAboveLine(column, stride, x, image.width, y, y_lo, y_hi, lit,
+                                 p.line_stripe_factor * linePx(camera, feet_px, line_width_m_),
+                                 static_cast<int>(std::lround(p.line_beside_width_factor *
+                                                              *expected * width_per_height)),
+                                 max_gap)
+                  : -1;
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
-          } else if (filled >= p.min_fill_fraction * needed) {
+          } else if (above_line >= 0) {
+            if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kFieldLine});
+            y = above_line;
+            continue;
+          } else if (long_enough) {
             // A dark stretch just below the bright feet (a joint's gap away at most) and no
             // taller than a foot is the feet's dark lower part or their contact shadow: the
             // robot stands at its bottom. (The darker reference after it hides those rows from

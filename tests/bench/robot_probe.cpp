@@ -76,6 +76,8 @@ int probe(int argc, char** argv) {
   env("RP_HELD", rpp.max_held_back);
   env("RD_HELD", config.robot_detector.min_held_back_confidence);
   env("RP_BESIDE", rpp.beside_width_factor);
+  env("RP_LINE", rpp.line_stripe_factor);
+  env("RP_LINEB", rpp.line_beside_width_factor);
   // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
   const bool exact_dump = std::getenv("RP_EXACT") != nullptr && std::atoi(std::getenv("RP_EXACT")) != 0;
   const Pipeline pipeline(config);

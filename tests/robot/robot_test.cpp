@@ -172,6 +172,47 @@ TEST(RobotProposer, FieldLineJustBelowTheFeetDoesNotBecomeTheFeet) {
   for (const RobotProposal& p : out.proposals) EXPECT_LT(p.feet_px.y(), line_y - 4);
 }
 
+// Fills the ground rectangle [x0, x1] × [y0, y1] (robot frame, metres) as the camera sees it.
+void fillGround(GrayImage& img, const CameraModel& cam, double x0, double x1, double y0, double y1,
+                int gray) {
+  std::vector<cv::Point> corners;
+  for (const Eigen::Vector2d& g : {Eigen::Vector2d(x0, y0), Eigen::Vector2d(x0, y1),
+                                   Eigen::Vector2d(x1, y1), Eigen::Vector2d(x1, y0)}) {
+    const Eigen::Vector2d px = *cam.robotToPixel({g.x(), g.y(), 0});
+    corners.emplace_back(int(std::lround(px.x())), int(std::lround(px.y())));
+  }
+  cv::Mat m = wrap(img);
+  cv::fillConvexPoly(m, corners, cv::Scalar(gray));
+}
+
+TEST(RobotProposer, FieldLineInFrontOfARobotsShadowIsNoFeet) {
+  // The run from the line's lower edge takes the shadow for legs in shade and reaches the robot:
+  // without the line test the box stood on the line, 0.25 m nearer than the robot.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(11);
+  fillGround(img, cam, 1.25, 1.5, -0.12, 0.12, 30);  // the shadow, up to the feet
+  fillGround(img, cam, 1.2, 1.25, -3, 3, 220);       // the line across the image
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.5, 0.0});
+  const double h = robotSizePx(cam, feet).h;
+  const double line_y = cam.robotToPixel({1.2, 0, 0})->y();
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << describe(out);
+  for (const RobotProposal& p : out.proposals)
+    EXPECT_LT(p.feet_px.y(), line_y - 4) << describe(out);
+  EXPECT_TRUE(std::any_of(out.rejected.begin(), out.rejected.end(), [](const auto& r) {
+    return r.reason == RobotRejectReason::kFieldLine;
+  })) << describe(out);
+
+  RobotProposerParams no_test = RobotProposerParams::loadDefault();
+  no_test.line_stripe_factor = 0;
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const RobotProposals old =
+      RobotProposer(no_test, FieldDimensions::loadDefault())
+          .run(img.view(), cam, all, HighContrastDetector().run(img.view(), all));
+  ASSERT_FALSE(old.proposals.empty());
+  EXPECT_NEAR(old.proposals[0].feet_px.y(), line_y, 3) << describe(old);
+}
+
 TEST(RobotProposer, LegsInShadeDarkerThanTheCarpetStillMakeARobot) {
   // Directional light: white soles, the legs above them darker than the lit carpet.
   const CameraModel cam = testCamera();

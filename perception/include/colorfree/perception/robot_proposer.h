@@ -42,6 +42,13 @@ struct RobotProposerParams {
   /// reference fills a run only when it is brighter by the jump than the pixel this many expected
   /// robot widths to its left or to its right too (the carpet beside the robot). 0: no such test.
   double beside_width_factor = 1.0;
+  /// A lit stretch at a run's lower end no taller than this many field-line widths seen there,
+  /// with more than the gap of unlit rows above it (carpet, or shade the run would take for legs)
+  /// and lit pixels line_beside_width_factor expected robot widths to its left or right (a line
+  /// runs on, feet end) is a field line in front of a shadow or a farther robot: the scan goes on
+  /// above it. 0: no such test.
+  double line_stripe_factor = 2.5;
+  double line_beside_width_factor = 1.5;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
   /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
   /// of the expected height (plus 2 px).
@@ -75,7 +82,15 @@ struct RobotProposerParams {
 };
 
 /// Why a scan-line run or a group did not become a proposal (only filled when asked for).
-enum class RobotRejectReason { kRunTooShort, kTooNarrow, kTooFar, kAboveHorizon, kOverlap, kTooMany };
+enum class RobotRejectReason {
+  kRunTooShort,
+  kTooNarrow,
+  kTooFar,
+  kAboveHorizon,
+  kOverlap,
+  kTooMany,
+  kFieldLine,  ///< a field line in front of shade (see line_stripe_factor)
+};
 const char* robotRejectReasonName(RobotRejectReason reason);
 
 struct RejectedRobotCandidate {
@@ -112,6 +127,7 @@ class RobotProposer {
   RobotProposerParams params_;
   double robot_height_m_;
   double robot_width_m_;
+  double line_width_m_;
 };
 
 }  // namespace colorfree
