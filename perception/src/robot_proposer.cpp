@@ -140,6 +140,9 @@ CARPET_WALK_ATTRIBUTES int walkCarpet(const std::uint8_t* column, std::ptrdiff_t
 struct RobotRun {
   int top;     ///< the run's top row
   int filled;  ///< its rows that differ from the carpet
+  /// The lowest row above y that is not lit (the lit stretch at the feet ends below it); -1 when
+  /// every row the run looked at is lit.
+  int first_unlit;
 };
 
 // Whether a pixel is brighter than the reference, and, unless no_side, than the carpet beside it
@@ -165,12 +168,13 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
                                             const LitTest& lit_test, double carpet,
                                             bool carpet_unknown) {
   const double thr = lit_test.thr;
-  int run_top = y, gap = 0, filled = 0;
+  int run_top = y, gap = 0, filled = 0, first_unlit = -1;
   const std::uint8_t* px = column + y * stride;
   for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy, px -= stride) {
     const double d = *px;
     const bool lit = lit_test(px);
     const bool shaded = !carpet_unknown && carpet - d > thr;
+    if (!lit && first_unlit < 0) first_unlit = yy;
     if (lit || shaded) {
       ++filled;
       run_top = yy;
@@ -179,7 +183,7 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
       break;
     }
   }
-  return {run_top, filled};
+  return {run_top, filled, first_unlit};
 }
 
 // The rows a field line line_width_m wide covers in the image with its near edge at `px` (0 where
@@ -194,29 +198,33 @@ double linePx(const CameraModel& camera, const Eigen::Vector2d& px, double line_
 
 // Where a field line crosses a scan line in front of shade (a robot's shadow, a farther robot's
 // darker legs), the run from the line's lower edge takes the shade for legs in shade and reaches
-// the robot above: a box on the line. A lit stretch from row y up, no taller than
-// line_stripe_factor field-line widths seen there (line_px), with more than max_gap unlit rows
-// above it, and with lit pixels beside_px to its left or right within 0.3 beside_px of its rows
-// (a line runs on; feet end within their robot's width) is such a line. Returns the row above the
-// line, where the scan goes on; -1 when the stretch is no such line.
+// the robot above: a box on the line. The lit stretch from row y up to first_unlit (exclusive; -1:
+// the stretch filled the whole run, legs) is such a line when more than max_gap unlit rows follow
+// above it, when lit pixels lie beside_px to its left or right within 0.3 beside_px of its rows
+// (a line runs on; feet end within their robot's width), and when it is no taller than
+// max_stripe_px() (line_stripe_factor field-line widths seen there; asked for last: two
+// projections). Returns the row above the line, where the scan goes on; -1 when it is no line.
+template <typename MaxStripePx>
 int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int width, int y,
-                 int y_lo, int y_hi, const LitTest& lit, double line_px, int beside_px,
-                 int max_gap) {
-  int yy = y;
-  while (yy >= y_lo && lit(column + yy * stride)) --yy;
-  const int stripe_top = yy + 1;
-  if (y + 1 - stripe_top > line_px) return -1;
+                 int first_unlit, int y_lo, int y_hi, const LitTest& lit, int beside_px,
+                 int max_gap, const MaxStripePx& max_stripe_px) {
+  if (first_unlit < y_lo) return -1;
+  const int stripe_top = first_unlit + 1;
   int unlit = 0;
-  for (; yy >= y_lo && unlit <= max_gap && !lit(column + yy * stride); --yy) ++unlit;
+  for (int yy = first_unlit; yy >= y_lo && unlit <= max_gap && !lit(column + yy * stride); --yy) {
+    ++unlit;
+  }
   if (unlit <= max_gap) return -1;
-  const int slack = static_cast<int>(std::lround(0.3 * beside_px));
+  const int slack = static_cast<int>(0.3 * beside_px + 0.5);
+  bool beside = false;
   for (int dx : {-beside_px, beside_px}) {
     if (x + dx < 0 || x + dx >= width) continue;
-    for (int r = std::max(y_lo, stripe_top - slack); r <= std::min(y_hi, y + slack); ++r) {
-      if (column[r * stride + dx] - lit.ref > lit.thr) return stripe_top - 1;
+    for (int r = std::max(y_lo, stripe_top - slack); r <= std::min(y_hi, y + slack) && !beside;
+         ++r) {
+      beside = column[r * stride + dx] - lit.ref > lit.thr;
     }
   }
-  return -1;
+  return beside && y + 1 - stripe_top <= max_stripe_px() ? stripe_top - 1 : -1;
 }
 
 double iou(const PixelBox& a, const PixelBox& b) {
@@ -321,11 +329,14 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           const bool long_enough = filled >= p.min_fill_fraction * needed;
           const int above_line =
               long_enough && p.line_stripe_factor > 0 && *expected >= p.min_expected_height_px
-                  ? rowAboveLine(column, stride, x, image.width, y, y_lo, y_hi, lit,
-                                 p.line_stripe_factor * linePx(camera, feet_px, line_width_m_),
+                  ? rowAboveLine(column, stride, x, image.width, y, run.first_unlit, y_lo, y_hi, lit,
                                  static_cast<int>(std::lround(p.line_beside_width_factor *
                                                               *expected * width_per_height)),
-                                 max_gap)
+                                 max_gap,
+                                 [&] {
+                                   return p.line_stripe_factor *
+                                          linePx(camera, feet_px, line_width_m_);
+                                 })
                   : -1;
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
