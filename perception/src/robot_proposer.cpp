@@ -326,25 +326,26 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           const RobotRun run =
               robotRun(column, stride, y, feet_y, needed, max_gap, lit, carpet, carpet_unknown);
           const int run_top = run.top, filled = run.filled;
-          const bool long_enough = filled >= p.min_fill_fraction * needed;
-          const int above_line =
-              long_enough && p.line_stripe_factor > 0 && *expected >= p.min_expected_height_px
-                  ? rowAboveLine(column, stride, x, image.width, y, run.first_unlit, y_lo, y_hi, lit,
-                                 static_cast<int>(std::lround(p.line_beside_width_factor *
-                                                              *expected * width_per_height)),
-                                 max_gap,
-                                 [&] {
-                                   return p.line_stripe_factor *
-                                          linePx(camera, feet_px, line_width_m_);
-                                 })
-                  : -1;
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
-          } else if (above_line >= 0) {
-            if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kFieldLine});
-            y = above_line;
-            continue;
-          } else if (long_enough) {
+          } else if (filled >= p.min_fill_fraction * needed) {
+            const int above_line =
+                p.line_stripe_factor > 0
+                    ? rowAboveLine(column, stride, x, image.width, y, run.first_unlit, y_lo, y_hi,
+                                   lit,
+                                   static_cast<int>(std::lround(p.line_beside_width_factor *
+                                                                *expected * width_per_height)),
+                                   max_gap,
+                                   [&] {
+                                     return p.line_stripe_factor *
+                                            linePx(camera, feet_px, line_width_m_);
+                                   })
+                    : -1;
+            if (above_line >= 0) {
+              if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kFieldLine});
+              y = above_line;
+              continue;
+            }
             // A dark stretch just below the bright feet (a joint's gap away at most) and no
             // taller than a foot is the feet's dark lower part or their contact shadow: the
             // robot stands at its bottom. (The darker reference after it hides those rows from
