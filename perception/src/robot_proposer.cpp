@@ -24,6 +24,8 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.beside_width_factor = f.getInRange("beside_width_factor", 0, 10);
   p.line_stripe_factor = f.getInRange("line_stripe_factor", 0, 100);
   p.line_beside_width_factor = f.getInRange("line_beside_width_factor", 0, 10);
+  p.knee_gap_height_fraction = f.getInRange("knee_gap_height_fraction", 0, 1);
+  p.knee_min_lit_height_fraction = f.getInRange("knee_min_lit_height_fraction", 0, 1);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
   p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
@@ -137,14 +139,6 @@ CARPET_WALK_ATTRIBUTES int walkCarpet(const std::uint8_t* column, std::ptrdiff_t
   return y;
 }
 
-struct RobotRun {
-  int top;     ///< the run's top row
-  int filled;  ///< its rows that differ from the carpet
-  /// The lowest row above y that is not lit (the lit stretch at the feet ends below it); -1 when
-  /// every row the run looked at is lit.
-  int first_unlit;
-};
-
 // Whether a pixel is brighter than the reference, and, unless no_side, than the carpet beside it
 // to one side or the other as well (left_px to the left, right_px to the right; 0: that side is
 // outside the image).
@@ -159,16 +153,52 @@ struct LitTest {
   }
 };
 
+struct RobotRun {
+  int top;     ///< the run's top row
+  int filled;  ///< its rows that differ from the carpet
+  /// The lowest row above y that is not lit (the lit stretch at the feet ends below it); -1 when
+  /// every row the run looked at is lit.
+  int first_unlit;
+  /// Where the run bridged a knee gap, the run's top below the gap (where the scan goes on when
+  /// the run is rejected); -1: no knee gap.
+  int below_knee_top = -1;
+};
+
+// The knee gap a run may bridge once (rows; 0: none), and the test of the lit stretch below it.
+struct KneeGap {
+  int max_rows = 0;
+  int min_lit_rows = 0;           ///< the lit stretch at the run's lower end at least this tall
+  int left_px = 0, right_px = 0;  ///< the columns beside it to look at (0: outside the image)
+};
+
+// Whether the lit stretch from row y up to first_unlit (exclusive) has lit pixels beside it, at
+// the knee test's columns, on at most half of its rows (a robot's legs end within its width; the
+// lit side of a light edge on the carpet runs on).
+bool litAlone(const std::uint8_t* column, std::ptrdiff_t stride, int y, int first_unlit,
+              const LitTest& lit, const KneeGap& knee) {
+  const double lit_above = lit.ref + lit.thr;
+  int beside = 0;
+  const std::uint8_t* px = column + y * stride;
+  for (int yy = y; yy > first_unlit; --yy, px -= stride) {
+    beside += (knee.left_px > 0 && px[-knee.left_px] > lit_above) ||
+              (knee.right_px > 0 && px[knee.right_px] > lit_above);
+  }
+  return 2 * beside <= y - first_unlit;
+}
+
 // The run of a robot's pixels from row y (the lowest pixel brighter than the reference) up to
-// `needed` rows above the feet row; a carpet gap longer than max_gap ends it. A pixel counts when
-// it is lit (no_side: no test beside, as where the carpet is known), or darker than the carpet
-// (legs in shade) where the carpet is known.
+// `needed` rows above the feet row; a carpet gap longer than max_gap ends it, but for one knee
+// gap (see KneeGap). A pixel counts when it is lit (no_side: no test beside, as where the carpet
+// is known), or darker than the carpet (legs in shade) where the carpet is known.
 __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptrdiff_t stride,
                                             int y, int feet_y, int needed, int max_gap,
                                             const LitTest& lit_test, double carpet,
-                                            bool carpet_unknown) {
+                                            bool carpet_unknown, const KneeGap& knee) {
   const double thr = lit_test.thr;
   int run_top = y, gap = 0, filled = 0, first_unlit = -1;
+  int gap_limit = max_gap;
+  bool may_bridge = knee.max_rows > max_gap;
+  RobotRun out{};
   const std::uint8_t* px = column + y * stride;
   for (int yy = y; yy >= 0 && feet_y - yy <= needed; --yy, px -= stride) {
     const double d = *px;
@@ -176,14 +206,26 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
     const bool shaded = !carpet_unknown && carpet - d > thr;
     if (!lit && first_unlit < 0) first_unlit = yy;
     if (lit || shaded) {
+      if (gap_limit > max_gap) {  // the end of the knee gap
+        out.below_knee_top = run_top;
+        gap_limit = max_gap;
+      }
       ++filled;
       run_top = yy;
       gap = 0;
-    } else if (++gap > max_gap) {
-      break;
+    } else if (++gap > gap_limit) {
+      if (!may_bridge || first_unlit < 0 || y - first_unlit < knee.min_lit_rows ||
+          !litAlone(column, stride, y, first_unlit, lit_test, knee)) {
+        break;
+      }
+      may_bridge = false;
+      gap_limit = knee.max_rows;
     }
   }
-  return {run_top, filled, first_unlit};
+  out.top = run_top;
+  out.filled = filled;
+  out.first_unlit = first_unlit;
+  return out;
 }
 
 // The rows a field line line_width_m wide covers in the image with its near edge at `px` (0 where
@@ -323,8 +365,18 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           const bool no_side = side_px <= 0 || (x_left < 0 && x_right >= image.width);
           const LitTest lit{ref, thr, no_side, x_left >= 0 ? side_px : 0,
                             x_right < image.width ? side_px : 0};
-          const RobotRun run =
-              robotRun(column, stride, y, feet_y, needed, max_gap, lit, carpet, carpet_unknown);
+          KneeGap knee;
+          if (p.knee_gap_height_fraction > 0) {
+            const int beside_px = static_cast<int>(
+                std::lround(p.line_beside_width_factor * *expected * width_per_height));
+            knee.max_rows = static_cast<int>(p.knee_gap_height_fraction * *expected);
+            knee.min_lit_rows =
+                static_cast<int>(std::ceil(p.knee_min_lit_height_fraction * *expected));
+            knee.left_px = x - beside_px >= 0 ? beside_px : 0;
+            knee.right_px = x + beside_px < image.width ? beside_px : 0;
+          }
+          const RobotRun run = robotRun(column, stride, y, feet_y, needed, max_gap, lit, carpet,
+                                        carpet_unknown, knee);
           const int run_top = run.top, filled = run.filled;
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
@@ -360,7 +412,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           } else if (keep_rejected) {
             out.rejected.push_back({feet_px, RobotRejectReason::kRunTooShort});
           }
-          y = run_top - 1;
+          // A rejected run goes on from below its knee gap, as it would without the gap.
+          y = (run.below_knee_top >= 0 ? run.below_knee_top : run_top) - 1;
         }
       }
     }

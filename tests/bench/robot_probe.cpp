@@ -78,6 +78,10 @@ int probe(int argc, char** argv) {
   env("RP_BESIDE", rpp.beside_width_factor);
   env("RP_LINE", rpp.line_stripe_factor);
   env("RP_LINEB", rpp.line_beside_width_factor);
+  env("RP_KNEE", rpp.knee_gap_height_fraction);
+  env("RP_KNEELIT", rpp.knee_min_lit_height_fraction);
+  // RP_MODELS=DIR: the nets from DIR (a retrained RobotNet) instead of perception/models.
+  if (const char* models = std::getenv("RP_MODELS")) config.model_dir = models;
   // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
   const bool exact_dump = std::getenv("RP_EXACT") != nullptr && std::atoi(std::getenv("RP_EXACT")) != 0;
   const Pipeline pipeline(config);

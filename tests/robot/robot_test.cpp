@@ -423,6 +423,64 @@ TEST(RobotProposer, ALongShadowBelowTheFeetIsNoPartOfThem) {
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
 }
 
+// The proposer's parameters with the knee gap for backlit halls (off in the shipped file).
+RobotProposerParams kneeGapParams() {
+  RobotProposerParams p = RobotProposerParams::loadDefault();
+  p.knee_gap_height_fraction = 0.10;
+  return p;
+}
+
+TEST(RobotProposer, BacklitKneeAtTheCarpetsGrayDoesNotLiftTheFeet) {
+  // Directional light from beyond the robot: its knee joints, in their own shade, at the carpet's
+  // gray over 0.08 of its height between the lit shins and thighs. Without the knee gap the run
+  // from the shins ends there and the scan finds the feet at the thighs, a box too small.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(12);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.8, 0.1});
+  const auto [h, w] = robotSizePx(cam, feet);
+  cv::Mat m = wrap(img);
+  const int knee_bottom = int(feet.y() - 0.15 * h), knee_top = int(feet.y() - 0.23 * h);
+  ASSERT_GT(knee_bottom - knee_top, 0.04 * h + 3);  // longer than the run's gap
+  cv::rectangle(m, cv::Point(int(feet.x() - 0.5 * w), knee_top),
+                cv::Point(int(feet.x() + 0.5 * w), knee_bottom), cv::Scalar(60), cv::FILLED);
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
+  const RobotProposals out = RobotProposer(kneeGapParams(), FieldDimensions::loadDefault())
+                                 .run(img.view(), cam, all, regions, true);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+
+  const RobotProposals old = propose(img, cam);  // the shipped parameters: no knee gap
+  EXPECT_FALSE(proposedAt(old, feet, h)) << describe(old);
+}
+
+TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
+  // The carpet lit brighter across the image (overexposed light: a bright stripe) a knee's gap
+  // below a robot: the stripe runs on beside the robot, so its gap to the legs is no knee, and
+  // the robot's feet stay where they are. Every window is scanned (the contrast stage need not
+  // mark the stripe's lower edge).
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(13);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.8, 0.1});
+  const double h = robotSizePx(cam, feet).h;
+  cv::Mat m = wrap(img);
+  const int lit_top = int(feet.y() + 0.05 * h);
+  cv::rectangle(m, cv::Point(0, lit_top), cv::Point(639, lit_top + int(0.12 * h)), cv::Scalar(110),
+                cv::FILLED);
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  ContrastRegions every;
+  every.columns = (img.width() + every.window_px - 1) / every.window_px;
+  every.rows = (img.height() + every.window_px - 1) / every.window_px;
+  every.mask.assign(static_cast<std::size_t>(every.columns) * every.rows, 1);
+  // (but for the lowest row, where the scan would not know the carpet)
+  std::fill(every.mask.end() - every.columns, every.mask.end(), 0);
+  const RobotProposer proposer(kneeGapParams(), FieldDimensions::loadDefault());
+  const RobotProposals out = proposer.run(img.view(), cam, all, every, true);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+  for (const RobotProposal& p : out.proposals) {
+    EXPECT_LT(p.feet_px.y(), lit_top) << describe(out);
+  }
+}
+
 TEST(RobotProposer, WrongSizedMaskIsAnError) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(4);

@@ -49,6 +49,16 @@ struct RobotProposerParams {
   /// above it. 0: no such test.
   double line_stripe_factor = 2.5;
   double line_beside_width_factor = 1.5;
+  /// A robot's knee joint in its own shade (backlit: the lamp beyond the robot) can sit at the
+  /// carpet's gray for longer than the run's gap. One gap up to this fraction of the expected
+  /// height is bridged when the lit stretch at the run's lower end (the shins) is at least
+  /// knee_min_lit_height_fraction of the height tall and has lit pixels
+  /// line_beside_width_factor robot widths to its left or right on at most half of its rows
+  /// (feet end within their robot's width; the carpet's lit side of a light edge runs on).
+  /// 0: no knee gap (the shipped value: an option for backlit halls, README "Robots and
+  /// orientation", robot11; 0.10 lifts directional light and loses robots elsewhere).
+  double knee_gap_height_fraction = 0;
+  double knee_min_lit_height_fraction = 0.10;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
   /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
   /// of the expected height (plus 2 px).
