@@ -10,6 +10,7 @@
 #include <numeric>
 
 #include "colorfree/perception/error.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/param_file.h"
 
 namespace colorfree {
@@ -203,27 +204,6 @@ void smoothScan(const std::uint8_t* in, int begin, int end, std::uint8_t* out) {
     out[i] = static_cast<std::uint8_t>((at(i - 2) + 4 * at(i - 1) + 6 * at(i) + 4 * at(i + 1) + at(i + 2) + 8) >> 4);
   }
 }
-
-// The spread of the edge differences along scan lines, from their median absolute value (lines
-// and robots are a small share of the samples): the standard deviation they would have as
-// Gaussian noise.
-class EdgeNoise {
- public:
-  void add(int difference) { ++histogram_[std::abs(difference)]; ++n_; }
-  double sigma() const {
-    if (n_ == 0) return 0;
-    std::uint32_t seen = 0;
-    for (int v = 0; v < 256; ++v) {
-      seen += histogram_[v];
-      if (2 * seen >= n_) return (v + 0.5) / 0.6745;
-    }
-    return 255;
-  }
-
- private:
-  std::uint32_t histogram_[256] = {};
-  std::uint32_t n_ = 0;
-};
 
 struct Fit {
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
@@ -449,7 +429,7 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
   // differences of neighbouring pixels (as noisy as those over edge_step_px for pixel noise, but
   // less affected by the carpet's smooth texture and shading).
   const auto noiseOf = [&](bool vertical) {
-    EdgeNoise noise;
+    DifferenceNoise noise;
     if (vertical) {
       for (int x = spacing / 2; x < w; x += 4 * spacing) {
         const std::uint8_t* d = columnData(x);

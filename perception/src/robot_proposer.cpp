@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "colorfree/perception/error.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/param_file.h"
 
 namespace colorfree {
@@ -14,6 +15,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.column_step_px = static_cast<int>(f.getInRange("column_step_px", 1, 32));
   p.min_jump_gray = f.getInRange("min_jump_gray", 1, 255);
   p.jump_ratio = f.getInRange("jump_ratio", 0, 1);
+  p.noise_jump_factor = f.getInRange("noise_jump_factor", 0, 20);
   p.carpet_update_weight = f.getInRange("carpet_update_weight", 0, 1);
   p.carpet_dark_decay = f.getInRange("carpet_dark_decay", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
@@ -293,7 +295,12 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
 
   std::vector<FeetPoint> feet;
   const int step = p.column_step_px;
-  const ScanConstants scan{p.min_jump_gray, p.jump_ratio, p.carpet_update_weight,
+  // The frame's noise raises the jump (each scan pixel is compared on its own).
+  const double min_jump =
+      p.noise_jump_factor > 0
+          ? std::max(p.min_jump_gray, p.noise_jump_factor * pixelNoiseGray(image, ignore))
+          : p.min_jump_gray;
+  const ScanConstants scan{min_jump, p.jump_ratio, p.carpet_update_weight,
                            1 - p.carpet_dark_decay, p.max_gap_px};
   const std::ptrdiff_t stride = image.stride;
   for (int wc = 0; wc < regions.columns; ++wc) {

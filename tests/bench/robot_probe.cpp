@@ -79,6 +79,7 @@ int probe(int argc, char** argv) {
   env("RP_LINE", rpp.line_stripe_factor);
   env("RP_LINEB", rpp.line_beside_width_factor);
   env("RP_KNEE", rpp.knee_gap_height_fraction);
+  env("RP_NOISE", rpp.noise_jump_factor);
   env("RP_KNEELIT", rpp.knee_min_lit_height_fraction);
   // RP_MODELS=DIR: the nets from DIR (a retrained RobotNet) instead of perception/models.
   if (const char* models = std::getenv("RP_MODELS")) config.model_dir = models;

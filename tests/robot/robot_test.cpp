@@ -12,6 +12,7 @@
 #include "colorfree/perception/high_contrast.h"
 #include "colorfree/perception/robot_detector.h"
 #include "colorfree/perception/robot_orientation.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/robot_proposer.h"
 
 namespace colorfree {
@@ -479,6 +480,53 @@ TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   for (const RobotProposal& p : out.proposals) {
     EXPECT_LT(p.feet_px.y(), lit_top) << describe(out);
   }
+}
+
+// Adds Gaussian noise of `sigma` gray levels to every pixel (seeded).
+void addNoise(GrayImage& img, double sigma, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0, sigma);
+  for (int y = 0; y < img.height(); ++y)
+    for (int x = 0; x < img.width(); ++x)
+      img.at(x, y) = static_cast<std::uint8_t>(std::clamp(img.at(x, y) + noise(rng), 0.0, 255.0));
+}
+
+TEST(PixelNoise, MeasuresTheNoiseNotTheObjects) {
+  const CameraModel cam = testCamera();
+  for (const double sigma : {4.0, 10.0, 20.0}) {
+    GrayImage img = carpet(14, 90);  // its own noise: 3
+    drawRobot(img, cam, {1.5, 0.2});
+    drawRobot(img, cam, {2.5, -0.5});
+    cv::rectangle(wrap(img), cv::Point(0, 300), cv::Point(639, 306), cv::Scalar(220), cv::FILLED);
+    addNoise(img, sigma, 15);
+    const double expected = std::hypot(sigma, 3.0);
+    const double measured = pixelNoiseGray(img.view(), IgnoreMask::all(640, 480));
+    // Within a tenth, and half a bin of the integer differences' histogram (0.5 / 0.6745 / sqrt 2).
+    EXPECT_NEAR(measured, expected, 0.1 * expected + 0.53) << "sigma " << sigma;
+  }
+  GrayImage img = carpet(16);
+  EXPECT_THROW(pixelNoiseGray(img.view(), IgnoreMask::all(320, 240)), Error);
+}
+
+TEST(RobotProposer, NoisyFrameKeepsTheFeet) {
+  // A dark hall's high gain (noise sigma 15 on a carpet of 60): single carpet pixels pass the
+  // fixed jump and the runs they start below the robot swallow its feet (the scan goes on above
+  // them). The jump that follows the frame's noise finds the feet.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(17);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.8, 0.1});
+  const double h = robotSizePx(cam, feet).h;
+  addNoise(img, 15, 18);
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+  EXPECT_LE(out.proposals.size(), 3u) << describe(out);
+
+  RobotProposerParams fixed = RobotProposerParams::loadDefault();
+  fixed.noise_jump_factor = 0;
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const RobotProposals old = RobotProposer(fixed, FieldDimensions::loadDefault())
+                                 .run(img.view(), cam, all, HighContrastDetector().run(img.view(), all));
+  EXPECT_FALSE(proposedAt(old, feet, h)) << describe(old);
 }
 
 TEST(RobotProposer, WrongSizedMaskIsAnError) {

@@ -19,6 +19,10 @@ struct RobotProposerParams {
   /// max(min_jump_gray, jump_ratio × carpet luminance) (gray levels).
   double min_jump_gray = 16;
   double jump_ratio = 0.18;
+  /// ... and by more than this many times the frame's pixel noise (pixelNoiseGray): on a noisy
+  /// frame (a dark hall's high gain) single carpet pixels would pass for the robot's, and the runs
+  /// they start would swallow the feet above them. 0: no such bound.
+  double noise_jump_factor = 2.5;
   /// Carpet pixels are averaged into the running carpet luminance with this weight.
   double carpet_update_weight = 0.25;
   /// After a darker stretch (a shadow, the ball's black patches) the reference a robot must be
