@@ -457,12 +457,12 @@ void printBenchTables(const json& results) {
     std::printf("  %-13s %-8s %15s %10s %10s %9s %-17s %6s\n", "net", "input", "params (paper)", "us single",
                 "us batch16", "paper ms", "accuracy", "paper");
     for (const auto& r : results.at("cnn_table")) {
-      const std::string params = std::to_string(r.at("parameters").get<long>()) + " (" +
-                                 std::to_string(r.at("paper_parameters").get<long>()) + ")";
-      std::printf("  %-13s %-8s %15s %10.2f %10.2f %9.3f %-17s %6.3f\n", r.at("net").get<std::string>().c_str(),
+      const std::string params =
+          std::to_string(r.at("parameters").get<long>()) + " (" + paperFmt(r.at("paper_parameters"), 0) + ")";
+      std::printf("  %-13s %-8s %15s %10.2f %10.2f %9s %-17s %6s\n", r.at("net").get<std::string>().c_str(),
                   r.at("input").get<std::string>().c_str(), params.c_str(), r.at("us_per_patch_single").get<double>(),
-                  r.at("us_per_patch_batch16").get<double>(), r.at("paper_time_ms").get<double>(),
-                  cnnAccuracy(results, r).c_str(), r.at("paper_accuracy").get<double>());
+                  r.at("us_per_patch_batch16").get<double>(), paperFmt(r.at("paper_time_ms")).c_str(),
+                  cnnAccuracy(results, r).c_str(), paperFmt(r.at("paper_accuracy")).c_str());
     }
   }
   if (s.contains("scenarios") && !s.at("scenarios").empty()) {
@@ -611,10 +611,10 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
        "<th>accuracy</th><th class=paper>paper accuracy</th></tr>";
   for (const auto& r : results.at("cnn_table")) {
     h << "<tr><td>" << esc(r.at("net").get<std::string>()) << "</td><td>" << esc(r.at("input").get<std::string>())
-      << "</td><td>" << r.at("parameters") << "</td><td class=paper>" << r.at("paper_parameters") << "</td><td>"
-      << fmt(r.at("us_per_patch_single"), 2) << "</td><td>" << fmt(r.at("us_per_patch_batch16"), 2)
-      << "</td><td class=paper>" << fmt(r.at("paper_time_ms")) << "</td><td>" << esc(cnnAccuracy(results, r))
-      << "</td><td class=paper>" << fmt(r.at("paper_accuracy")) << "</td></tr>";
+      << "</td><td>" << r.at("parameters") << "</td><td class=paper>" << paperFmt(r.at("paper_parameters"), 0)
+      << "</td><td>" << fmt(r.at("us_per_patch_single"), 2) << "</td><td>" << fmt(r.at("us_per_patch_batch16"), 2)
+      << "</td><td class=paper>" << paperFmt(r.at("paper_time_ms")) << "</td><td>" << esc(cnnAccuracy(results, r))
+      << "</td><td class=paper>" << paperFmt(r.at("paper_accuracy")) << "</td></tr>";
   }
   h << "</table>";
   if (s.contains("scenarios") && !s.at("scenarios").empty()) {

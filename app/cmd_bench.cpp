@@ -59,18 +59,20 @@ std::string itemName(const BenchPlan& plan, const WorkItem& item) {
 json cnnTableJson() {
   json rows = json::array();
   for (const CnnTableRow& r : cnnTable(cnn::defaultModelDir(), "")) {
+    const bool paper = r.paper_parameters > 0;  // the paper has the net
+    const auto paperFigure = [paper](double v) { return paper ? json(v) : json(nullptr); };
     rows.push_back({{"net", r.name},
                     {"input", std::to_string(r.input_width) + "x" + std::to_string(r.input_height) + "x" +
                                   std::to_string(r.input_channels)},
                     {"parameters", r.parameters},
-                    {"paper_parameters", r.paper_parameters},
+                    {"paper_parameters", paperFigure(r.paper_parameters)},
                     {"multiply_adds", r.multiply_adds},
                     {"us_per_patch_single", r.us_per_patch_single},
                     {"us_per_patch_batch16", r.us_per_patch_batch16},
-                    {"paper_time_ms", r.paper_time_ms},
+                    {"paper_time_ms", paperFigure(r.paper_time_ms)},
                     {"trained", r.trained},
                     {"accuracy", r.accuracy},
-                    {"paper_accuracy", r.paper_accuracy}});
+                    {"paper_accuracy", paperFigure(r.paper_accuracy)}});
   }
   return rows;
 }

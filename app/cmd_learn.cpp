@@ -41,7 +41,8 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
-  cmd->add_option("OBJECT", o->object, "what to learn: ball, robot (RobotNet), ori_boost (OriBoostNet), ori (OriNet)")->required();
+  cmd->add_option("OBJECT", o->object, "what to learn: ball (BoostBallNet, BallNet), smeared_ball (SmearedBallNet), robot (RobotNet), ori_boost "
+                  "(OriBoostNet), ori (OriNet)")->required();
   cmd->add_option("--train", o->train, "training scenario files (new frames every round)")->required();
   cmd->add_option("--bootstrap", o->bootstrap, "scenario files without the object (hard negatives)");
   cmd->add_option("--validation", o->validation, "held-out scenario files (early stopping)")->required();
@@ -66,8 +67,9 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
   cmd->add_flag("--quiet", o->quiet, "only the final summary");
   cmd->callback([o, &exit_code] {
     std::unique_ptr<training::ObjectKind> kind_ptr;
-    if (o->object == "ball") {
-      kind_ptr = std::make_unique<training::BallKind>(PipelineConfig::loadDefault(), ScoringParams::loadDefault());
+    if (o->object == "ball" || o->object == "smeared_ball") {
+      kind_ptr = std::make_unique<training::BallKind>(PipelineConfig::loadDefault(), ScoringParams::loadDefault(),
+                                                      o->object == "smeared_ball");
     } else if (o->object == "robot" || o->object == "ori_boost" || o->object == "ori") {
       const auto which = o->object == "robot"       ? training::RobotNetChoice::kRobotNet
                          : o->object == "ori_boost" ? training::RobotNetChoice::kOriBoostNet

@@ -133,6 +133,12 @@ double timePerPatchUs(const cnn::Classifier& classifier, int batch) {
   return runs[runs.size() / 2];
 }
 
+std::string fixed3(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", v);
+  return buf;
+}
+
 void runTable(const std::string& models, const std::string& data_root) {
   std::printf(
       "Table 1 for our nets (time: this machine, one core, median CPU time; paper: NAO V5)\n\n");
@@ -141,9 +147,12 @@ void runTable(const std::string& models, const std::string& data_root) {
       "paper ms | accuracy | paper accuracy |\n");
   std::printf("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (const CnnTableRow& r : cnnTable(models, data_root)) {
-    std::printf("| %s | %dx%dx%d | %lld (%d) | %lld | %.2f | %.2f | %.3f | %s | %.3f |\n", r.name.c_str(), r.input_width,
-                r.input_height, r.input_channels, r.parameters, r.paper_parameters, r.multiply_adds,
-                r.us_per_patch_single, r.us_per_patch_batch16, r.paper_time_ms, r.accuracy.c_str(), r.paper_accuracy);
+    const bool paper = r.paper_parameters > 0;  // the paper has the net
+    std::printf("| %s | %dx%dx%d | %lld (%s) | %lld | %.2f | %.2f | %s | %s | %s |\n", r.name.c_str(), r.input_width,
+                r.input_height, r.input_channels, r.parameters,
+                paper ? std::to_string(r.paper_parameters).c_str() : "-", r.multiply_adds, r.us_per_patch_single,
+                r.us_per_patch_batch16, paper ? fixed3(r.paper_time_ms).c_str() : "-", r.accuracy.c_str(),
+                paper ? fixed3(r.paper_accuracy).c_str() : "-");
   }
 }
 

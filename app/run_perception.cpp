@@ -43,7 +43,11 @@ void addBallClassifierSamples(const Frame& frame, FramePercepts* out) {
     out->classifier_samples.push_back(s);
     if (!d.passed_boost) continue;
     s.classifier = "BallNet";
-    s.predicted_positive = d.detected || d.ball_confidence >= 0.5f;
+    s.predicted_positive = d.ball_confidence >= 0.5f;
+    out->classifier_samples.push_back(s);
+    if (d.smeared_confidence < 0) continue;  // not smeared: SmearedBallNet did not see it
+    s.classifier = "SmearedBallNet";
+    s.predicted_positive = d.smeared_confidence >= 0.5f;
     out->classifier_samples.push_back(s);
   }
 }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
+#include <vector>
 
 #include "colorfree/perception/cnn/net.h"
 #include "colorfree/perception/error.h"
@@ -20,6 +22,11 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.ball_min_confidence = f.getInRange("ball_min_confidence", 0, 1);
   p.max_balls = static_cast<int>(f.getInRange("max_balls", 1, 100));
   p.max_centre_outside_radii = f.getInRange("max_centre_outside_radii", 0, 100);
+  p.smeared_min_coherence = f.getInRange("smeared_min_coherence", 0, 2);
+  p.smeared_ball_min_confidence = f.getInRange("smeared_ball_min_confidence", 0, 1);
+  p.smeared_min_radius_px = f.getInRange("smeared_min_radius_px", 0, 1000);
+  p.smeared_centre_reach_radii = f.getInRange("smeared_centre_reach_radii", 1, 20);
+  p.smeared_centre_min_contrast_gray = f.getInRange("smeared_centre_min_contrast_gray", 0, 255);
   f.finish();
   return p;
 }
@@ -40,18 +47,113 @@ double centreOutsideRadii(const Eigen::Vector2d& centre_px, double radius_px, in
   return std::hypot(dx, dy) / std::max(radius_px, 1e-9);
 }
 
-BallDetector::BallDetector(BallDetectorParams params, cnn::Classifier boost_net, cnn::Classifier ball_net)
-    : params_(params), boost_net_(std::move(boost_net)), ball_net_(std::move(ball_net)) {
-  if (boost_net_.classes() != 2 || ball_net_.classes() != 2) {
-    throw Error("ball detector: both nets must have two classes (none, ball)");
+double patchSmear(const GrayView& image, const cnn::PatchBox& box, Eigen::Vector2d* along) {
+  constexpr int side = kSmearPatchSide;
+  if (box.x_px < 0 || box.y_px < 0 || box.x_px + box.width_px > image.width ||
+      box.y_px + box.height_px > image.height) {
+    return -1;
+  }
+  std::vector<float> v(static_cast<std::size_t>(side) * side);
+  cnn::extractPatch(image, box, side, side, cnn::PatchNormalization::kUnitRange, v.data());
+  double xx = 0, xy = 0, yy = 0;
+  for (int y = 1; y + 1 < side; ++y) {
+    const float* a = &v[(y - 1) * side];
+    const float* b = &v[y * side];
+    const float* c = &v[(y + 1) * side];
+    for (int x = 1; x + 1 < side; ++x) {
+      const double gx = (a[x + 1] + 2 * b[x + 1] + c[x + 1]) - (a[x - 1] + 2 * b[x - 1] + c[x - 1]);
+      const double gy = (c[x - 1] + 2 * c[x] + c[x + 1]) - (a[x - 1] + 2 * a[x] + a[x + 1]);
+      xx += gx * gx;
+      xy += gx * gy;
+      yy += gy * gy;
+    }
+  }
+  if (along) {
+    const double gradient_angle = 0.5 * std::atan2(2 * xy, xx - yy);  // the dominant gradient's direction
+    *along = Eigen::Vector2d(-std::sin(gradient_angle), std::cos(gradient_angle));
+  }
+  const double trace = xx + yy;
+  if (trace <= 1e-12) return 0;
+  return std::sqrt((xx - yy) * (xx - yy) + 4 * xy * xy) / trace;
+}
+
+namespace {
+
+// Bilinear gray at (x, y) in image coordinates (pixel centres at +0.5), clamped to the image.
+double grayAt(const GrayView& image, double x, double y) {
+  const double u = std::clamp(x - 0.5, 0.0, image.width - 1.0), v = std::clamp(y - 0.5, 0.0, image.height - 1.0);
+  const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+  const int x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
+  const double fx = u - x0, fy = v - y0;
+  const double top = image.at(x0, y0) + fx * (image.at(x1, y0) - image.at(x0, y0));
+  const double bottom = image.at(x0, y1) + fx * (image.at(x1, y1) - image.at(x0, y1));
+  return top + fy * (bottom - top);
+}
+
+}  // namespace
+
+std::optional<Eigen::Vector2d> smearedBallCentre(const GrayView& image, const Eigen::Vector2d& centre_px,
+                                                 double radius_px, const Eigen::Vector2d& along,
+                                                 double reach_radii, double min_contrast_gray) {
+  const int reach = static_cast<int>(std::ceil(reach_radii * radius_px));
+  const Eigen::Vector2d across(-along.y(), along.x());
+  constexpr int kAcross = 9;  // samples over ±radius/2 across the smear
+  std::vector<double> profile(2 * reach + 1);
+  for (int t = -reach; t <= reach; ++t) {
+    double sum = 0;
+    for (int j = 0; j < kAcross; ++j) {
+      const Eigen::Vector2d q = centre_px + t * along + radius_px * (j / (kAcross - 1.0) - 0.5) * across;
+      sum += grayAt(image, q.x(), q.y());
+    }
+    profile[t + reach] = sum / kAcross;
+  }
+  const int ends = std::max(3, static_cast<int>(std::lround(0.5 * radius_px)));
+  if (2 * ends >= static_cast<int>(profile.size())) return std::nullopt;
+  std::vector<double> outer(profile.begin(), profile.begin() + ends);
+  outer.insert(outer.end(), profile.end() - ends, profile.end());
+  std::nth_element(outer.begin(), outer.begin() + outer.size() / 2, outer.end());
+  const double carpet = outer[outer.size() / 2];
+  const int near = std::min(reach, static_cast<int>(std::ceil(radius_px)));
+  const double peak = *std::max_element(profile.begin() + reach - near, profile.begin() + reach + near + 1);
+  if (peak - carpet < min_contrast_gray) return std::nullopt;
+  const double half = carpet + 0.5 * (peak - carpet);
+  int seed = -1;  // the above-half sample nearest the proposal's centre
+  for (int d = 0; d <= reach && seed < 0; ++d) {
+    if (profile[reach + d] > half) seed = reach + d;
+    else if (profile[reach - d] > half) seed = reach - d;
+  }
+  if (seed < 0) return std::nullopt;
+  int first = seed, last = seed;
+  while (first > 0 && profile[first - 1] > half) --first;
+  while (last + 1 < static_cast<int>(profile.size()) && profile[last + 1] > half) ++last;
+  if (first == 0 || last + 1 == static_cast<int>(profile.size())) return std::nullopt;
+  return Eigen::Vector2d(centre_px + 0.5 * (first + last - 2 * reach) * along);
+}
+
+BallDetector::BallDetector(BallDetectorParams params, cnn::Classifier boost_net, cnn::Classifier ball_net,
+                           std::optional<cnn::Classifier> smeared_net)
+    : params_(params),
+      boost_net_(std::move(boost_net)),
+      ball_net_(std::move(ball_net)),
+      smeared_net_(std::move(smeared_net)) {
+  if (boost_net_.classes() != 2 || ball_net_.classes() != 2 || (smeared_net_ && smeared_net_->classes() != 2)) {
+    throw Error("ball detector: the nets must have two classes (none, ball)");
+  }
+  if (params_.smeared_min_coherence <= 1 && !smeared_net_) {
+    throw Error("ball detector: smeared_min_coherence " + std::to_string(params_.smeared_min_coherence) +
+                " routes smeared patches to SmearedBallNet, but no SmearedBallNet was given");
   }
 }
 
 BallDetector BallDetector::load(BallDetectorParams params, const std::string& model_dir) {
   const std::string dir = model_dir.empty() ? cnn::defaultModelDir() : model_dir;
+  std::optional<cnn::Classifier> smeared;
+  if (params.smeared_min_coherence <= 1) {
+    smeared = cnn::Classifier::load(dir + "/smeared_ball_net.cfg", dir + "/smeared_ball_net.weights");
+  }
   return BallDetector(params,
                       cnn::Classifier::load(dir + "/boost_ball_net.cfg", dir + "/boost_ball_net.weights"),
-                      cnn::Classifier::load(dir + "/ball_net.cfg", dir + "/ball_net.weights"));
+                      cnn::Classifier::load(dir + "/ball_net.cfg", dir + "/ball_net.weights"), std::move(smeared));
 }
 
 std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraModel& camera,
@@ -80,10 +182,22 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     }
     kept.push_back(i);
   }
-  std::vector<float> ball_prob;
-  std::vector<cnn::PatchBox> kept_boxes;
+  // BallNet sees every kept patch; SmearedBallNet those it rejects that the camera's motion smeared.
+  std::vector<cnn::PatchBox> kept_boxes, smeared_boxes;
   for (int i : kept) kept_boxes.push_back(boxes[i]);
+  std::vector<float> ball_prob, smeared_prob;
   if (!kept_boxes.empty()) ball_net_.classify(image, kept_boxes, ball_prob);
+  std::vector<float> smear(kept.size(), -1.0f);
+  std::vector<Eigen::Vector2d> along(kept.size(), Eigen::Vector2d::UnitX());
+  if (smeared_net_) {
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      if (ball_prob[2 * k + 1] >= params_.ball_min_confidence) continue;
+      if (proposals[kept[k]].radius_px < params_.smeared_min_radius_px) continue;
+      smear[k] = static_cast<float>(patchSmear(image, kept_boxes[k], &along[k]));
+      if (smear[k] >= params_.smeared_min_coherence) smeared_boxes.push_back(kept_boxes[k]);
+    }
+  }
+  if (!smeared_boxes.empty()) smeared_net_->classify(image, smeared_boxes, smeared_prob);
 
   std::vector<BallPercept> out;
   std::vector<BallDecision> all(proposals.size());
@@ -93,18 +207,32 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   }
   // `kept` is in descending boost order; detections are reported in descending BallNet order.
   std::vector<std::pair<float, int>> hits;
+  std::vector<std::optional<Eigen::Vector2d>> smeared_centre(proposals.size());
+  std::size_t next_smeared = 0;
   for (std::size_t k = 0; k < kept.size(); ++k) {
     const int i = kept[k];
     all[i].passed_boost = true;
+    all[i].smear = smear[k];
     all[i].ball_confidence = ball_prob[2 * k + 1];
-    if (ball_prob[2 * k + 1] >= params_.ball_min_confidence) hits.emplace_back(ball_prob[2 * k + 1], i);
+    if (all[i].ball_confidence >= params_.ball_min_confidence) {
+      hits.emplace_back(all[i].ball_confidence, i);
+    }
+    if (smear[k] >= params_.smeared_min_coherence) {
+      all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];
+      if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence) {
+        hits.emplace_back(all[i].smeared_confidence, i);
+        smeared_centre[i] = smearedBallCentre(image, proposals[i].centre_px, proposals[i].radius_px, along[k],
+                                              params_.smeared_centre_reach_radii,
+                                              params_.smeared_centre_min_contrast_gray);
+      }
+    }
   }
   std::stable_sort(hits.begin(), hits.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   for (const auto& [conf, i] : hits) {
     if (static_cast<int>(out.size()) >= params_.max_balls) break;
     all[i].detected = true;
     BallPercept b;
-    b.centre_px = proposals[i].centre_px;
+    b.centre_px = smeared_centre[i].value_or(proposals[i].centre_px);
     b.radius_px = proposals[i].radius_px;
     b.confidence = conf;
     b.position_in_robot = camera.pixelToGround(b.centre_px, params_.ball_radius_m);

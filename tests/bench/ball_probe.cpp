@@ -2,7 +2,8 @@
 // true ball, every ball proposal (distance to the truth, match, both nets' scores) and the
 // percepts, so a miss can be traced to the proposer or to the nets.
 //   ball_probe SCENARIO [frames_per_case] [case] [png_dir]
-// BP_MODELS=DIR takes the nets from DIR; BP_TEXTURE=... and the others below override parameters.
+// BP_MODELS=DIR takes the nets from DIR (BP_SMEAR=0.5 routes smeared patches to its
+// smeared_ball_net too); BP_TEXTURE=... and the others below override parameters.
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -57,6 +58,8 @@ int probe(int argc, char** argv) {
   env("BP_RIDGEMINR", config.ball_proposer.centre_ridge_min_radius_px);
   if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
   if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
+  env("BP_SMEAR", config.ball_detector.smeared_min_coherence);
+  env("BP_SMEARCONF", config.ball_detector.smeared_ball_min_confidence);
   // BP_EXACT=1: each proposal's centre, radius and response also printed in full (hexadecimal).
   const bool exact = std::getenv("BP_EXACT") != nullptr;
   const Pipeline pipeline(config);
@@ -83,15 +86,18 @@ int probe(int argc, char** argv) {
         const bool m =
             truth.ball_present && b.in_view && ballMatchCost(b, p.centre_px, scoring).has_value();
         ph = ph || (m && demand);
-        float bc = -1, bn = -1;
+        BallDecision d;
         if (frame.ball_decisions) {
-          for (const auto& d : *frame.ball_decisions) {
-            if (d.proposal == static_cast<int>(i)) bc = d.boost_confidence, bn = d.ball_confidence;
+          for (const auto& e : *frame.ball_decisions) {
+            if (e.proposal == static_cast<int>(i)) d = e;
           }
         }
-        std::printf("   prop %2zu (%.1f,%.1f) r=%.1f resp=%.1f dist=%.1f%s boost=%.3f ball=%.3f\n",
+        std::printf("   prop %2zu (%.1f,%.1f) r=%.1f resp=%.1f dist=%.1f%s boost=%.3f ball=%.3f",
                     i, p.centre_px.x(), p.centre_px.y(), p.radius_px, p.response,
-                    (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", bc, bn);
+                    (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", d.boost_confidence,
+                    d.ball_confidence);
+        if (d.smear >= 0) std::printf(" smear=%.2f smeared=%.3f", d.smear, d.smeared_confidence);
+        std::printf("\n");
         // Every bit of the proposal (a speedup must leave them as they were).
         if (exact) {
           std::printf("        exact %a %a %a %a\n", p.centre_px.x(), p.centre_px.y(),

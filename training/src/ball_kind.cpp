@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "colorfree/groundtruth/matching.h"
+#include "colorfree/perception/error.h"
 
 namespace colorfree::training {
 
@@ -23,8 +24,23 @@ std::string ballTruthText(const BallInImage& b) {
 
 }  // namespace
 
-BallKind::BallKind(PipelineConfig pipeline, ScoringParams scoring)
-    : config_(pipeline), pipeline_(earlyStages(pipeline)), proposer_(pipeline.ball_proposer), scoring_(scoring) {}
+BallKind::BallKind(PipelineConfig pipeline, ScoringParams scoring, bool smeared_only)
+    : config_(pipeline),
+      pipeline_(earlyStages(pipeline)),
+      proposer_(pipeline.ball_proposer),
+      scoring_(scoring),
+      smeared_only_(smeared_only) {
+  if (smeared_only_ && config_.ball_detector.smeared_min_coherence > 1) {
+    throw Error("learn smeared_ball: smeared_min_coherence in ball_detector.yaml is above 1, so the detector "
+                "gives SmearedBallNet no patch");
+  }
+}
+
+bool BallKind::takes(const GrayImage& image, const cnn::PatchBox& box, double radius_px) const {
+  const BallDetectorParams& p = config_.ball_detector;
+  return !smeared_only_ ||
+         (radius_px >= p.smeared_min_radius_px && patchSmear(image.view(), box) >= p.smeared_min_coherence);
+}
 
 std::vector<Candidate> BallKind::proposals(const GrayImage& image, const CameraModel& camera,
                                            const FrameTruth& truth) const {
@@ -42,6 +58,7 @@ std::vector<Candidate> BallKind::proposals(const GrayImage& image, const CameraM
     std::snprintf(key, sizeof key, "%d,%d,%d", static_cast<int>(std::floor(p.centre_px.x())),
                   static_cast<int>(std::floor(p.centre_px.y())), static_cast<int>(std::lround(p.radius_px)));
     c.key = key;
+    if (!takes(image, c.box, p.radius_px)) continue;
     if (ball_here && ballMatchCost(ball, p.centre_px, scoring_)) {
       if (!ball.should_detect) continue;  // too hidden or too small to demand: not a sample either way
       c.label = 1;
@@ -57,13 +74,14 @@ std::vector<Candidate> BallKind::proposals(const GrayImage& image, const CameraM
   return out;
 }
 
-std::vector<Candidate> BallKind::truthSamples(const GrayImage& /*image*/, const CameraModel& /*camera*/,
+std::vector<Candidate> BallKind::truthSamples(const GrayImage& image, const CameraModel& /*camera*/,
                                               const FrameTruth& truth) const {
   std::vector<Candidate> out;
   const BallInImage& ball = truth.ball;
   if (!truth.ball_present || !ball.in_view || !ball.should_detect) return out;
   Candidate c;
   c.box = ballPatchBox(ball.centre_px, ball.radius_px, config_.ball_detector.patch_diameters);
+  if (!takes(image, c.box, ball.radius_px)) return out;
   c.label = 1;
   char key[64];
   std::snprintf(key, sizeof key, "truth %d,%d,%d", static_cast<int>(std::floor(ball.centre_px.x())),

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,20 @@ struct BallDetectorParams {
   /// A proposal whose centre lies more than this × its radius outside the image shows less than
   /// about half of a ball: it is not passed on to BallNet (nor reported).
   double max_centre_outside_radii = 0.25;
+  /// A kept proposal BallNet rejects whose patch lies inside the image and is at least this
+  /// elongated (`patchSmear`: a ball smeared by the camera's motion) goes to SmearedBallNet too,
+  /// which may accept it. Above 1: never (SmearedBallNet is not loaded): the shipped file's
+  /// choice, for the false positives it adds (README ball12); 0.5 switches it on.
+  double smeared_min_coherence = 2;
+  double smeared_ball_min_confidence = 0.5;  ///< SmearedBallNet's "ball" score for a detection
+  /// ... and only for proposals of at least this radius: the smeared balls it learnt from are
+  /// 0.8-1.7 m away (radius 10 px and more); a far ball's few pixels are BallNet's alone.
+  double smeared_min_radius_px = 10;
+  /// A ball SmearedBallNet accepts is put at the middle of its smear (`smearedBallCentre`), looked
+  /// for up to this many radii either side of the proposal along the smear ...
+  double smeared_centre_reach_radii = 3;
+  /// ... when the smear is at least this much brighter than the carpet beyond its ends.
+  double smeared_centre_min_contrast_gray = 8;
 
   bool operator==(const BallDetectorParams&) const = default;
   static BallDetectorParams load(const std::string& path);
@@ -37,22 +52,51 @@ cnn::PatchBox ballPatchBox(const Eigen::Vector2d& centre_px, double radius_px,
 /// (0 inside; the image spans [0, width] × [0, height], pixel centres at +0.5).
 double centreOutsideRadii(const Eigen::Vector2d& centre_px, double radius_px, int width, int height);
 
+/// Side in pixels of the patch `patchSmear` measures (BallNet's input size).
+inline constexpr int kSmearPatchSide = 26;
+
+/// How elongated the kSmearPatchSide² patch cut from `box` (as the nets cut it) is, 0..1: the
+/// coherence (λ1 − λ2) / (λ1 + λ2) of the structure tensor of its Sobel gradients. A sharp whole
+/// ball is near 0 (its outline and patches turn every way); smeared sideways by the camera's
+/// motion it rises towards 1 with the smear's length; a straight edge is 1. -1 when the box
+/// reaches beyond the image (a ball cut by the border is elongated too).
+/// `along`, when given, gets the smear's direction (unit; the direction of least change).
+double patchSmear(const GrayView& image, const cnn::PatchBox& box, Eigen::Vector2d* along = nullptr);
+
+/// The middle of a smeared ball: the gray profile along `along` through `centre_px` (each point the
+/// mean over ±radius/2 across the smear), `reach_radii` × `radius_px` either side; its level beyond
+/// the ends (the median of the outer radius/2 on both sides) is the carpet's; the run of the
+/// profile above half-way from that level to its peak (within a radius of `centre_px`) that lies
+/// nearest `centre_px` is the smear, and its middle the ball's centre. None when the peak is less
+/// than `min_contrast_gray` above the carpet, or the run reaches an end (a line, not a ball).
+std::optional<Eigen::Vector2d> smearedBallCentre(const GrayView& image, const Eigen::Vector2d& centre_px,
+                                                 double radius_px, const Eigen::Vector2d& along,
+                                                 double reach_radii, double min_contrast_gray);
+
 /// What the cascade decided for every proposal (for scoring, active learning and the report).
 struct BallDecision {
   int proposal = 0;                ///< index into the proposals
   float boost_confidence = 0;      ///< BoostBallNet's "ball" probability
   bool passed_boost = false;       ///< among the kept ones
   float ball_confidence = -1;      ///< BallNet's "ball" probability; -1 when it did not run
+  float smear = -1;                ///< `patchSmear` of a kept proposal BallNet rejected; else -1, or beyond the image
+  float smeared_confidence = -1;   ///< SmearedBallNet's "ball" probability; -1 when it did not run
   bool detected = false;
 };
 
 /// Ball classification (paper 2.4): BoostBallNet (12×12) sorts the proposals by confidence and
-/// keeps at most five; BallNet (26×26) decides. Nets read from perception/models by default.
+/// keeps at most five; BallNet (26×26) decides; a patch it rejects that the camera's motion smeared
+/// (`smeared_min_coherence`) gets a second look by SmearedBallNet (BallNet's shape, trained on such
+/// patches only).
+/// Nets read from perception/models by default.
 class BallDetector {
  public:
-  BallDetector(BallDetectorParams params, cnn::Classifier boost_net, cnn::Classifier ball_net);
-  /// The shipped nets (boost_ball_net, ball_net) from `model_dir` (default: perception/models);
-  /// throws colorfree::Error naming the file when a model is missing or broken.
+  /// `smeared_net` is required when `params.smeared_min_coherence` ≤ 1.
+  BallDetector(BallDetectorParams params, cnn::Classifier boost_net, cnn::Classifier ball_net,
+               std::optional<cnn::Classifier> smeared_net = std::nullopt);
+  /// The shipped nets (boost_ball_net, ball_net, smeared_ball_net when used) from `model_dir`
+  /// (default: perception/models); throws colorfree::Error naming the file when a model is missing
+  /// or broken.
   static BallDetector load(BallDetectorParams params, const std::string& model_dir = "");
 
   std::vector<BallPercept> run(const GrayView& image, const CameraModel& camera,
@@ -64,6 +108,7 @@ class BallDetector {
   BallDetectorParams params_;
   cnn::Classifier boost_net_;
   cnn::Classifier ball_net_;
+  std::optional<cnn::Classifier> smeared_net_;
 };
 
 }  // namespace colorfree

@@ -8,8 +8,8 @@
 
 namespace colorfree::cnn {
 
-/// One of the paper's five nets as shipped in perception/models (<stem>.cfg, <stem>.weights),
-/// with the paper's Table 1 figures (NAO V5) beside it.
+/// One of the nets shipped in perception/models (<stem>.cfg, <stem>.weights): the paper's five
+/// with its Table 1 figures (NAO V5) beside them, then ours the paper has not (paper figures 0).
 struct ShippedNet {
   const char* name;  ///< the paper's name
   const char* stem;  ///< file name without extension
@@ -36,6 +36,7 @@ inline constexpr ShippedNet kShippedNets[] = {
     {"BallNet", "ball_net", 26, {"none", "ball", nullptr, nullptr}, 444, 0.343, 0.984},
     {"OriBoostNet", "ori_boost_net", 12, {"unusable", "usable", nullptr, nullptr}, 246, 0.059, 0.962},
     {"OriNet", "ori_net", 24, {"front", "back", "side_left", "side_right"}, 657, 0.329, 0.984},
+    {"SmearedBallNet", "smeared_ball_net", 26, {"none", "ball", nullptr, nullptr}, 0, 0, 0},
 };
 
 }  // namespace colorfree::cnn
