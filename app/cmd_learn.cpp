@@ -35,6 +35,7 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
     int frames = 8, stride = 4, rounds = 3, bootstrap_rounds = 1, epochs = 40, patience = 8;
     float bootstrap_confidence = 0.5f;
     float border_cut = 0.0f;
+    double min_smear = 0.5;
     std::uint64_t seed = 1;
     std::string dataset = "build/ball_dataset";
     std::string models;
@@ -62,14 +63,19 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
                   "augmentation: chance of cutting a patch as the image border cuts an object (0..1; up to 0.6 of "
                   "the patch deep, 30 % of the cuts at a corner)")
       ->capture_default_str();
+  cmd->add_option("--min-smear", o->min_smear,
+                  "smeared_ball: the patchSmear bound of the patches it learns from (the detector's "
+                  "smeared_min_coherence when switched on)")
+      ->capture_default_str();
   cmd->add_option("--dataset", o->dataset, "dataset folder to write (one sub-folder per net)")->capture_default_str();
   cmd->add_option("--models", o->models, "model folder: cfgs read, weights written (default: perception/models)");
   cmd->add_flag("--quiet", o->quiet, "only the final summary");
   cmd->callback([o, &exit_code] {
     std::unique_ptr<training::ObjectKind> kind_ptr;
     if (o->object == "ball" || o->object == "smeared_ball") {
-      kind_ptr = std::make_unique<training::BallKind>(PipelineConfig::loadDefault(), ScoringParams::loadDefault(),
-                                                      o->object == "smeared_ball");
+      PipelineConfig config = PipelineConfig::loadDefault();
+      if (o->object == "smeared_ball") config.ball_detector.smeared_min_coherence = o->min_smear;
+      kind_ptr = std::make_unique<training::BallKind>(config, ScoringParams::loadDefault(), o->object == "smeared_ball");
     } else if (o->object == "robot" || o->object == "ori_boost" || o->object == "ori") {
       const auto which = o->object == "robot"       ? training::RobotNetChoice::kRobotNet
                          : o->object == "ori_boost" ? training::RobotNetChoice::kOriBoostNet

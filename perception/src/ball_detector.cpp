@@ -205,7 +205,7 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     all[i].proposal = static_cast<int>(i);
     all[i].boost_confidence = boost_prob[2 * i + 1];
   }
-  // `kept` is in descending boost order; detections are reported in descending BallNet order.
+  // `kept` is in descending boost order; detections are reported in descending confidence (either net's).
   std::vector<std::pair<float, int>> hits;
   std::vector<std::optional<Eigen::Vector2d>> smeared_centre(proposals.size());
   std::size_t next_smeared = 0;

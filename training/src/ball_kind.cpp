@@ -31,8 +31,7 @@ BallKind::BallKind(PipelineConfig pipeline, ScoringParams scoring, bool smeared_
       scoring_(scoring),
       smeared_only_(smeared_only) {
   if (smeared_only_ && config_.ball_detector.smeared_min_coherence > 1) {
-    throw Error("learn smeared_ball: smeared_min_coherence in ball_detector.yaml is above 1, so the detector "
-                "gives SmearedBallNet no patch");
+    throw Error("learn smeared_ball: a smeared_min_coherence above 1 gives SmearedBallNet no patch");
   }
 }
 
