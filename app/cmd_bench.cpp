@@ -59,7 +59,7 @@ std::string itemName(const BenchPlan& plan, const WorkItem& item) {
 json cnnTableJson() {
   json rows = json::array();
   for (const CnnTableRow& r : cnnTable(cnn::defaultModelDir(), "")) {
-    const bool paper = r.paper_parameters > 0;  // the paper has the net
+    const bool paper = r.hasPaperFigures();
     const auto paperFigure = [paper](double v) { return paper ? json(v) : json(nullptr); };
     rows.push_back({{"net", r.name},
                     {"input", std::to_string(r.input_width) + "x" + std::to_string(r.input_height) + "x" +

@@ -147,7 +147,7 @@ void runTable(const std::string& models, const std::string& data_root) {
       "paper ms | accuracy | paper accuracy |\n");
   std::printf("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (const CnnTableRow& r : cnnTable(models, data_root)) {
-    const bool paper = r.paper_parameters > 0;  // the paper has the net
+    const bool paper = r.hasPaperFigures();
     std::printf("| %s | %dx%dx%d | %lld (%s) | %lld | %.2f | %.2f | %s | %s | %s |\n", r.name.c_str(), r.input_width,
                 r.input_height, r.input_channels, r.parameters,
                 paper ? std::to_string(r.paper_parameters).c_str() : "-", r.multiply_adds, r.us_per_patch_single,

@@ -189,7 +189,7 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   if (!kept_boxes.empty()) ball_net_.classify(image, kept_boxes, ball_prob);
   std::vector<float> smear(kept.size(), -1.0f);
   std::vector<Eigen::Vector2d> along(kept.size(), Eigen::Vector2d::UnitX());
-  if (smeared_net_) {
+  if (params_.smeared_min_coherence <= 1) {  // the constructor made sure of the net
     for (std::size_t k = 0; k < kept.size(); ++k) {
       if (ball_prob[2 * k + 1] >= params_.ball_min_confidence) continue;
       if (proposals[kept[k]].radius_px < params_.smeared_min_radius_px) continue;

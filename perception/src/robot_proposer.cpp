@@ -372,15 +372,16 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           const bool no_side = side_px <= 0 || (x_left < 0 && x_right >= image.width);
           const LitTest lit{ref, thr, no_side, x_left >= 0 ? side_px : 0,
                             x_right < image.width ? side_px : 0};
+          // How far beside a lit stretch a field line would still be lit (the line and knee tests).
+          const int line_beside_px =
+              static_cast<int>(std::lround(p.line_beside_width_factor * *expected * width_per_height));
           KneeGap knee;
           if (p.knee_gap_height_fraction > 0) {
-            const int beside_px = static_cast<int>(
-                std::lround(p.line_beside_width_factor * *expected * width_per_height));
             knee.max_rows = static_cast<int>(p.knee_gap_height_fraction * *expected);
             knee.min_lit_rows =
                 static_cast<int>(std::ceil(p.knee_min_lit_height_fraction * *expected));
-            knee.left_px = x - beside_px >= 0 ? beside_px : 0;
-            knee.right_px = x + beside_px < image.width ? beside_px : 0;
+            knee.left_px = x - line_beside_px >= 0 ? line_beside_px : 0;
+            knee.right_px = x + line_beside_px < image.width ? line_beside_px : 0;
           }
           const RobotRun run = robotRun(column, stride, y, feet_y, needed, max_gap, lit, carpet,
                                         carpet_unknown, knee);
@@ -391,10 +392,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
             const int above_line =
                 p.line_stripe_factor > 0
                     ? rowAboveLine(column, stride, x, image.width, y, run.first_unlit, y_lo, y_hi,
-                                   lit,
-                                   static_cast<int>(std::lround(p.line_beside_width_factor *
-                                                                *expected * width_per_height)),
-                                   max_gap,
+                                   lit, line_beside_px, max_gap,
                                    [&] {
                                      return p.line_stripe_factor *
                                             linePx(camera, feet_px, line_width_m_);
