@@ -16,6 +16,13 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
   p.max_inside_fraction = f.getInRange("max_inside_fraction", 0, 1);
   p.min_held_back_confidence = f.getInRange("min_held_back_confidence", 0, 1);
+  p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
+  p.shin_reach_width_fraction = f.getInRange("shin_reach_width_fraction", 0, 5);
+  p.shin_min_jump_gray = f.getInRange("shin_min_jump_gray", 1, 255);
+  p.shin_jump_ratio = f.getInRange("shin_jump_ratio", 0, 1);
+  p.shin_beside_width_factor = f.getInRange("shin_beside_width_factor", 0.1, 10);
+  p.shin_min_span_width_fraction = f.getInRange("shin_min_span_width_fraction", 0, 5);
+  p.shin_max_spread_height_fraction = f.getInRange("shin_max_spread_height_fraction", 0, 1);
   f.finish();
   return p;
 }
@@ -30,8 +37,9 @@ cnn::PatchBox robotPatchBox(const RobotProposal& proposal) {
           static_cast<float>(b.height())};
 }
 
-RobotDetector::RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net)
-    : params_(params), net_(std::move(robot_net)) {
+RobotDetector::RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net,
+                             FieldDimensions field)
+    : params_(params), net_(std::move(robot_net)), field_(field) {
   if (net_.input().width != 24 || net_.input().height != 24 || net_.classes() != 2) {
     throw Error("robot detector: RobotNet must take 24x24 patches and give 2 classes");
   }
@@ -40,7 +48,8 @@ RobotDetector::RobotDetector(RobotDetectorParams params, cnn::Classifier robot_n
 RobotDetector RobotDetector::loadDefault() {
   const cnn::ShippedNet& s = cnn::kShippedNets[0];
   return RobotDetector(RobotDetectorParams::loadDefault(),
-                       cnn::Classifier::load(s.cfgPath(), s.weightsPath()));
+                       cnn::Classifier::load(s.cfgPath(), s.weightsPath()),
+                       FieldDimensions::loadDefault());
 }
 
 namespace {
@@ -59,6 +68,98 @@ double insideFraction(const PixelBox& a, const PixelBox& b) {
   return area > 0 ? ix * iy / area : 0;
 }
 }  // namespace
+
+std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel& camera,
+                                        const RobotPercept& percept,
+                                        const RobotDetectorParams& params,
+                                        const FieldDimensions& field) {
+  if (params.shin_gap_height_fraction <= 0) return std::nullopt;
+  const auto h0 = camera.robotHeightPx(percept.feet_px, field.robot_height_m);
+  const int feet_y = static_cast<int>(percept.feet_px.y());
+  if (!h0 || feet_y < 0 || feet_y >= image.height - 1) return std::nullopt;
+  const double width_per_height = field.robot_width_m / field.robot_height_m;
+  const double w = *h0 * width_per_height;
+  const int knee_rows = static_cast<int>(params.shin_gap_height_fraction * *h0) + 1;
+  const int max_gap = std::max(3, static_cast<int>(0.04 * *h0));  // a run's gap (the proposer's)
+  const int y_end = std::min(image.height - 1, feet_y + knee_rows + static_cast<int>(0.5 * *h0));
+  const auto at = [&](int x, int y) { return image.data[y * image.stride + x]; };
+  // The carpet: the median gray beside the robot at those rows.
+  std::vector<int> carpet_px;
+  for (int y = feet_y; y <= y_end; y += 2) {
+    for (double f : {-1.0, -0.8, 0.8, 1.0}) {
+      const int x = static_cast<int>(percept.feet_px.x() + f * w);
+      if (x >= 0 && x < image.width) carpet_px.push_back(at(x, y));
+    }
+  }
+  if (carpet_px.size() < 4) return std::nullopt;
+  std::nth_element(carpet_px.begin(), carpet_px.begin() + carpet_px.size() / 2, carpet_px.end());
+  const double carpet = carpet_px[carpet_px.size() / 2];
+  const double lit_above =
+      carpet + std::max(params.shin_min_jump_gray, params.shin_jump_ratio * carpet);
+  const auto lit = [&](int x, int y) { return at(x, y) > lit_above; };
+  std::vector<int> xs, bottoms;
+  const double reach = params.shin_reach_width_fraction * w;
+  for (int x = static_cast<int>(percept.feet_px.x() - reach); x <= percept.feet_px.x() + reach;
+       x += 2) {
+    if (x < 0 || x >= image.width) continue;
+    // Down over the knee's gap to the shin's top, then down the shin to carpet below it.
+    int y = feet_y, gap = 0;
+    while (y <= y_end && !lit(x, y) && gap <= knee_rows) {
+      ++y;
+      ++gap;
+    }
+    if (gap > knee_rows || y > y_end) continue;
+    const int top = y;
+    int holes = 0, last_lit = y;
+    for (; y <= y_end && holes <= max_gap; ++y) {
+      if (lit(x, y)) {
+        last_lit = y;
+        holes = 0;
+      } else {
+        ++holes;
+      }
+    }
+    if (holes <= max_gap) continue;  // no carpet below it within reach
+    const int bottom = last_lit + 1;
+    const auto h = camera.robotHeightPx({x + 0.5, static_cast<double>(bottom)}, field.robot_height_m);
+    const int tall = bottom - top;
+    if (!h || tall < 0.1 * *h || tall > 0.45 * *h) continue;
+    // Beside the legs (in the percept's robot widths).
+    const int beside = static_cast<int>(params.shin_beside_width_factor * w);
+    int lit_beside = 0;
+    for (int yy = top; yy < bottom; ++yy) {
+      lit_beside += (x - beside >= 0 && lit(x - beside, yy)) ||
+                    (x + beside < image.width && lit(x + beside, yy));
+    }
+    if (2 * lit_beside > tall) continue;
+    xs.push_back(x);
+    bottoms.push_back(bottom);
+  }
+  if (xs.size() < 3 || xs.back() - xs.front() < params.shin_min_span_width_fraction * w) {
+    return std::nullopt;
+  }
+  std::sort(bottoms.begin(), bottoms.end());
+  const std::size_t q = bottoms.size() / 4;
+  if (bottoms[bottoms.size() - 1 - q] - bottoms[q] >
+      std::max(3.0, params.shin_max_spread_height_fraction * *h0)) {
+    return std::nullopt;
+  }
+  const int new_feet_y = bottoms[bottoms.size() / 2];
+  const double cx = 0.5 * (xs.front() + xs.back() + 1);
+  const auto h = camera.robotHeightPx({cx, static_cast<double>(new_feet_y)}, field.robot_height_m);
+  if (!h) return std::nullopt;
+  // The box as the proposer drew it about the feet, scaled by the expected heights' ratio.
+  const double k = *h / *h0;
+  const PixelBox& b = percept.box;
+  RobotPercept out = percept;
+  out.feet_px = {cx, static_cast<double>(new_feet_y)};
+  out.box.x0 = cx - 0.5 * k * b.width();
+  out.box.x1 = cx + 0.5 * k * b.width();
+  out.box.y1 = new_feet_y + k * (b.y1 - percept.feet_px.y());
+  out.box.y0 = out.box.y1 - k * b.height();
+  out.position_in_robot = camera.pixelToGround(out.feet_px);
+  return out;
+}
 
 std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
                                 const std::vector<float>& confidence,
@@ -143,6 +244,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     r.feet_px = p.feet_px;
     r.confidence = robot[i];
     r.position_in_robot = camera.pixelToGround(p.feet_px);
+    // Its legs below a backlit knee: the feet at the shins.
+    if (auto lowered = feetOnShins(image, camera, r, params_, field_)) r = *lowered;
     out.push_back(r);
   }
   if (confidences) *confidences = std::move(robot);

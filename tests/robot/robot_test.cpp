@@ -624,6 +624,100 @@ TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) 
       Error);
 }
 
+// A percept as the proposer and RobotNet would give it with its feet at `feet` (the proposer's
+// box: 1.25 robot widths, 1.08 heights, 0.04 of a height below the feet).
+RobotPercept perceptAt(const CameraModel& cam, const Eigen::Vector2d& feet) {
+  const auto [h, w] = robotSizePx(cam, feet);
+  RobotPercept r;
+  r.feet_px = feet;
+  r.box = pixelBox(feet.x() - 0.625 * w, feet.y() + 0.04 * h - 1.08 * h, feet.x() + 0.625 * w,
+                   feet.y() + 0.04 * h);
+  r.confidence = 0.9f;
+  r.position_in_robot = cam.pixelToGround(feet);
+  return r;
+}
+
+std::optional<RobotPercept> onShins(const GrayImage& img, const CameraModel& cam,
+                                    const RobotPercept& r) {
+  return feetOnShins(img.view(), cam, r, RobotDetectorParams::loadDefault(),
+                     FieldDimensions::loadDefault());
+}
+
+TEST(RobotDetector, FeetGoDownToShinsBelowABacklitKnee) {
+  // The knees at the carpet's gray over 7 rows, 0.07 of the height (longer than a run's gap): the
+  // proposal's feet stand on the thighs, its box too high. The shins below it move the feet (and
+  // the box) down to them.
+  // Its legs, blurred by the walk, one lit stretch half a robot wide.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(21);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {3.0, 0.1});
+  const auto [h, w] = robotSizePx(cam, feet);
+  cv::rectangle(wrap(img), cv::Point(int(feet.x() - 0.42 * w), int(feet.y() - 0.37 * h)),
+                cv::Point(int(feet.x() + 0.42 * w), int(feet.y()) - 1), cv::Scalar(60), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(int(feet.x() - 0.25 * w), int(feet.y() - 0.37 * h)),
+                cv::Point(int(feet.x() + 0.25 * w), int(feet.y()) - 1), cv::Scalar(170),
+                cv::FILLED);
+  const int knee_bottom = int(feet.y() - 0.15 * h), knee_top = knee_bottom - 6;
+  ASSERT_GT(knee_bottom + 1 - knee_top, std::max(3.0, 0.04 * h));  // longer than a run's gap
+  cv::rectangle(wrap(img), cv::Point(int(feet.x() - 0.5 * w), knee_top),
+                cv::Point(int(feet.x() + 0.5 * w), knee_bottom), cv::Scalar(60), cv::FILLED);
+  const Eigen::Vector2d on_thighs(feet.x() + 0.2 * w, knee_top);
+  const auto lowered = onShins(img, cam, perceptAt(cam, on_thighs));
+  ASSERT_TRUE(lowered.has_value());
+  EXPECT_NEAR(lowered->feet_px.y(), feet.y(), 2.0);
+  EXPECT_NEAR(lowered->feet_px.x(), feet.x(), 0.1 * w);
+  const RobotPercept truth = perceptAt(cam, feet);
+  EXPECT_NEAR(lowered->box.y1, truth.box.y1, 3.0);
+  EXPECT_NEAR(lowered->box.height(), truth.box.height(), 0.05 * h);
+  EXPECT_NEAR(lowered->box.width(), truth.box.width(), 0.05 * w);
+  ASSERT_TRUE(lowered->position_in_robot.has_value());
+  EXPECT_NEAR(lowered->position_in_robot->x(), 3.0, 0.1);
+
+  // Switched off, or with no shins below the knee: the percept stays as it is.
+  RobotDetectorParams off = RobotDetectorParams::loadDefault();
+  off.shin_gap_height_fraction = 0;
+  EXPECT_FALSE(feetOnShins(img.view(), cam, perceptAt(cam, on_thighs), off,
+                           FieldDimensions::loadDefault()));
+  cv::rectangle(wrap(img), cv::Point(int(feet.x() - 0.5 * w), knee_bottom),
+                cv::Point(int(feet.x() + 0.5 * w), int(feet.y()) + 2), cv::Scalar(60),
+                cv::FILLED);
+  EXPECT_FALSE(onShins(img, cam, perceptAt(cam, on_thighs)));
+}
+
+TEST(RobotDetector, ABallOrAFieldLineBelowTheFeetIsNoShin) {
+  // A robot standing where its percept says, with the ball or a field line a knee's gap below
+  // its feet: the ball's lower edge is round, the line runs on beside the robot.
+  const CameraModel cam = testCamera();
+  for (int what = 0; what < 2; ++what) {
+    GrayImage img = carpet(22 + what);
+    const Eigen::Vector2d feet = drawRobot(img, cam, {2.0, 0.0});
+    const auto [h, w] = robotSizePx(cam, feet);
+    const RobotPercept r = perceptAt(cam, feet);
+    EXPECT_FALSE(onShins(img, cam, r)) << "before drawing " << what;
+    cv::Mat m = wrap(img);
+    if (what == 0) {
+      // The nearest ball whose top is 0.04 of the height below the feet.
+      double d = 2.0;
+      Eigen::Vector2d ball;
+      double radius = 0;
+      do {
+        d -= 0.01;
+        ball = *cam.robotToPixel({d, 0.0, 0.05});
+        radius = *cam.ballRadiusPx(ball, 0.05);
+      } while (ball.y() - radius - feet.y() < 0.04 * h);
+      ASSERT_GT(ball.y() - radius - feet.y(), 2);  // a gap between them
+      ASSERT_LT(ball.y() - radius - feet.y(), 0.10 * h);
+      cv::circle(m, cv::Point(int(ball.x()), int(ball.y())), int(radius), cv::Scalar(220),
+                 cv::FILLED);
+    } else {
+      const int y = int(feet.y() + 0.05 * h);
+      cv::rectangle(m, cv::Point(0, y), cv::Point(639, y + int(0.12 * h)), cv::Scalar(220),
+                    cv::FILLED);
+    }
+    EXPECT_FALSE(onShins(img, cam, r)) << (what == 0 ? "ball" : "line");
+  }
+}
+
 TEST(Cns, SameResponseUnderTwoIlluminationLevels) {
   // A horizontal step edge (dark below, bright above) at two contrasts and brightness levels.
   auto edge = [](int dark, int bright) {

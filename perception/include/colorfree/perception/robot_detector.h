@@ -1,10 +1,12 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "colorfree/perception/camera_model.h"
 #include "colorfree/perception/cnn/classifier.h"
+#include "colorfree/perception/field_dimensions.h"
 #include "colorfree/perception/image.h"
 #include "colorfree/perception/percepts.h"
 
@@ -20,6 +22,26 @@ struct RobotDetectorParams {
   /// A held-back candidate's patch holds parts of the nearer boxes RobotNet rejected, which may
   /// be a robot RobotNet missed: it becomes a percept only at this robot probability or more.
   double min_held_back_confidence = 0.7;
+  /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
+  /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
+  /// stand at the knees or thighs, its box too high. The lit stretch below the feet at most this
+  /// fraction of the robot's height away is looked for (0: never).
+  double shin_gap_height_fraction = 0.10;
+  /// ... on scan lines every 2 px within this fraction of the robot's width left and right of the
+  /// feet point. A scan line's stretch counts when lit (brighter than the carpet beside the robot
+  /// by max(shin_min_jump_gray, shin_jump_ratio × the carpet)), 0.1 to 0.45 of the height tall at
+  /// its lower end, with carpet below it, and lit shin_beside_width_factor robot widths left or
+  /// right on at most half its rows (widths of the robot the percept's feet point stands for; a
+  /// line runs on, legs end; so does a nearer robot's body).
+  double shin_reach_width_fraction = 0.6;
+  double shin_min_jump_gray = 16;
+  double shin_jump_ratio = 0.18;
+  double shin_beside_width_factor = 0.8;
+  /// The shins need at least 3 such scan lines spanning this fraction of the robot's width, their
+  /// lower ends within max(3 px, this fraction of the height) (interquartile range: feet stand on
+  /// flat ground; the ball's lower edge is round).
+  double shin_min_span_width_fraction = 0.4;
+  double shin_max_spread_height_fraction = 0.04;
 
   bool operator==(const RobotDetectorParams&) const = default;
   static RobotDetectorParams load(const std::string& path);
@@ -37,11 +59,19 @@ std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
 /// The proposal box as RobotNet's patch.
 cnn::PatchBox robotPatchBox(const RobotProposal& proposal);
 
+/// The percept moved down to its shins when a robot's legs stand below its feet point, a knee's gap
+/// away (see shin_gap_height_fraction): the feet at the shins' median lower end, the box scaled by
+/// the expected heights' ratio and centred on the shins. Empty when there are none.
+std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel& camera,
+                                        const RobotPercept& percept,
+                                        const RobotDetectorParams& params,
+                                        const FieldDimensions& field);
+
 /// Classifies robot proposals with RobotNet (24×24, paper 2.3) and turns the accepted ones into
 /// percepts with their ground point in the robot frame.
 class RobotDetector {
  public:
-  RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net);
+  RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net, FieldDimensions field = {});
   /// The shipped parameters and RobotNet (perception/models/robot_net.*).
   static RobotDetector loadDefault();
   /// `confidences` (optional) gets RobotNet's output for every proposal, in order.
@@ -61,6 +91,7 @@ class RobotDetector {
  private:
   RobotDetectorParams params_;
   cnn::Classifier net_;
+  FieldDimensions field_;
 };
 
 }  // namespace colorfree
