@@ -97,6 +97,7 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
   const double lit_above =
       carpet + std::max(params.shin_min_jump_gray, params.shin_jump_ratio * carpet);
   const auto lit = [&](int x, int y) { return at(x, y) > lit_above; };
+  const int beside = static_cast<int>(params.shin_beside_width_factor * w);  // the percept's widths
   std::vector<int> xs, bottoms;
   const double reach = params.shin_reach_width_fraction * w;
   for (int x = static_cast<int>(percept.feet_px.x() - reach); x <= percept.feet_px.x() + reach;
@@ -124,8 +125,6 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
     const auto h = camera.robotHeightPx({x + 0.5, static_cast<double>(bottom)}, field.robot_height_m);
     const int tall = bottom - top;
     if (!h || tall < 0.1 * *h || tall > 0.45 * *h) continue;
-    // Beside the legs (in the percept's robot widths).
-    const int beside = static_cast<int>(params.shin_beside_width_factor * w);
     int lit_beside = 0;
     for (int yy = top; yy < bottom; ++yy) {
       lit_beside += (x - beside >= 0 && lit(x - beside, yy)) ||

@@ -644,10 +644,9 @@ std::optional<RobotPercept> onShins(const GrayImage& img, const CameraModel& cam
 }
 
 TEST(RobotDetector, FeetGoDownToShinsBelowABacklitKnee) {
-  // The knees at the carpet's gray over 7 rows, 0.07 of the height (longer than a run's gap): the
-  // proposal's feet stand on the thighs, its box too high. The shins below it move the feet (and
-  // the box) down to them.
-  // Its legs, blurred by the walk, one lit stretch half a robot wide.
+  // The legs, blurred by the walk, one lit stretch half a robot wide; the knees at the carpet's
+  // gray over 7 rows, 0.07 of the height (longer than a run's gap): the proposal's feet stand on
+  // the thighs, its box too high. The shins below it move the feet (and the box) down to them.
   const CameraModel cam = testCamera();
   GrayImage img = carpet(21);
   const Eigen::Vector2d feet = drawRobot(img, cam, {3.0, 0.1});
