@@ -16,6 +16,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
   p.max_inside_fraction = f.getInRange("max_inside_fraction", 0, 1);
   p.min_held_back_confidence = f.getInRange("min_held_back_confidence", 0, 1);
+  p.min_behind_robot_confidence = f.getInRange("min_behind_robot_confidence", 0, 1);
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
   p.shin_reach_width_fraction = f.getInRange("shin_reach_width_fraction", 0, 5);
   p.shin_min_jump_gray = f.getInRange("shin_min_jump_gray", 1, 255);
@@ -216,6 +217,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     for (std::size_t i = 0; i < boxes.size(); ++i) robot.push_back(probs[2 * i + 1]);
   };
   classify(0);
+  // Per classified held-back candidate: whether a nearer box it stands behind holds a robot.
+  std::vector<bool> behind_robot;
   for (const HeldBackRobotProposal& h : held_back) {
     bool free = true;
     for (int k : h.nearer) {
@@ -224,16 +227,34 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       }
       free &= robot[k] < params_.min_confidence;
     }
-    if (free) seen.push_back(h.proposal);
+    if (free || params_.min_behind_robot_confidence < 1) {
+      seen.push_back(h.proposal);
+      behind_robot.push_back(!free);
+    }
   }
   classify(proposals.size());
   std::vector<PixelBox> proposal_boxes;
   proposal_boxes.reserve(seen.size());
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
-  // Held-back boxes under their own bar take no part in the choice.
+  // Held-back boxes under their own bar take no part in the choice. Nor does a box behind a robot
+  // with another box RobotNet accepted inside it: its patch holds the nearer robot's body and that
+  // robot, which would become its part.
   std::vector<float> accepted = robot;
   for (std::size_t i = proposals.size(); i < seen.size(); ++i) {
-    if (accepted[i] < params_.min_held_back_confidence) accepted[i] = 0;
+    if (!behind_robot[i - proposals.size()]) {
+      if (accepted[i] < params_.min_held_back_confidence) accepted[i] = 0;
+      continue;
+    }
+    bool holds_one = false;
+    for (std::size_t k = 0; k < seen.size() && !holds_one; ++k) {
+      const bool other_accepted =
+          k < proposals.size() ? robot[k] >= params_.min_confidence
+                               : !behind_robot[k - proposals.size()] &&
+                                     robot[k] >= params_.min_held_back_confidence;
+      holds_one = other_accepted &&
+                  insideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
+    }
+    if (accepted[i] < params_.min_behind_robot_confidence || holds_one) accepted[i] = 0;
   }
   std::vector<RobotPercept> out;
   for (int i : keptRobotBoxes(proposal_boxes, accepted, params_)) {

@@ -564,13 +564,13 @@ TEST(RobotDetector, KeptBoxesDropOverlapsAndPartsOfALargerRobot) {
 
 // A stand-in for RobotNet: its robot probability is sigmoid(40 (patch mean / 255) - 20), above
 // 0.5 on patches brighter than mid-gray.
-RobotDetector brightnessDetector() {
+RobotDetector brightnessDetector(const RobotDetectorParams& params = {}) {
   cnn::Net n = cnn::parseDarknetCfg(
       "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
       "[convolutional]\nfilters=2\nsize=1\nstride=1\nactivation=linear\n\n[avgpool]\n\n[softmax]\n",
       "brightness net");
   n.params() = {0.0f, -20.0f, 0.0f, 40.0f};  // biases (no robot, robot), then weights
-  return RobotDetector(RobotDetectorParams{}, cnn::Classifier(std::move(n)));
+  return RobotDetector(params, cnn::Classifier(std::move(n)));
 }
 
 TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) {
@@ -586,7 +586,9 @@ TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) 
   const RobotProposal carpet_box = proposal(pixelBox(100, 100, 300, 420));  // no robot
   const RobotProposal bright_box = proposal(pixelBox(395, 95, 465, 225));   // a robot
   const RobotProposal behind = proposal(pixelBox(405, 105, 455, 215));      // held back
-  const RobotDetector detector = brightnessDetector();
+  RobotDetectorParams params;
+  params.min_behind_robot_confidence = 1;  // nothing behind a robot is classified
+  const RobotDetector detector = brightnessDetector(params);
   std::vector<RobotProposal> classified;
   std::vector<float> confidences;
 
@@ -622,6 +624,47 @@ TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) 
   EXPECT_THROW(
       detector.run(img.view(), cam, {carpet_box}, {{behind, {1}}}, &classified, &confidences),
       Error);
+}
+
+TEST(RobotDetector, ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOtherBox) {
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(300, 60), cv::Point(620, 300), cv::Scalar(200), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(100, 320), cv::Point(200, 440), cv::Scalar(142), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const auto proposal = [](const PixelBox& box) {
+    RobotProposal p;
+    p.box = box;
+    p.feet_px = {(box.x0 + box.x1) / 2, box.y1};
+    return p;
+  };
+  const RobotProposal near = proposal(pixelBox(400, 100, 460, 200));    // a robot (probability ~1)
+  const RobotProposal beside = proposal(pixelBox(480, 120, 540, 220));  // ~1, overlaps nothing
+  const RobotProposal around = proposal(pixelBox(320, 70, 600, 290));   // ~1, the near box inside it
+  const RobotProposal unsure = proposal(pixelBox(100, 320, 200, 440));  // ~0.9
+  const std::vector<HeldBackRobotProposal> held = {{around, {0}}, {beside, {0}}, {unsure, {0}}};
+  RobotDetectorParams params;  // min_behind_robot_confidence 0.97, as shipped
+  std::vector<RobotProposal> classified;
+  std::vector<float> confidences;
+  const auto robots =
+      brightnessDetector(params).run(img.view(), cam, {near}, held, &classified, &confidences);
+  ASSERT_EQ(classified.size(), 4u);
+  ASSERT_EQ(confidences.size(), 4u);
+  EXPECT_GT(confidences[1], 0.97f);  // around: sure, yet the near percept lies inside its box
+  EXPECT_GT(confidences[2], 0.97f);
+  EXPECT_GT(confidences[3], 0.7f);  // over the held-back bar, under the bar behind a robot
+  EXPECT_LT(confidences[3], 0.97f);
+  ASSERT_EQ(robots.size(), 2u);
+  std::vector<double> x0s = {robots[0].box.x0, robots[1].box.x0};
+  std::sort(x0s.begin(), x0s.end());
+  EXPECT_EQ(x0s, (std::vector<double>{near.box.x0, beside.box.x0}));
+
+  // Switched off: only the proposals are classified.
+  params.min_behind_robot_confidence = 1;
+  const auto off =
+      brightnessDetector(params).run(img.view(), cam, {near}, held, &classified, &confidences);
+  EXPECT_EQ(classified.size(), 1u);
+  ASSERT_EQ(off.size(), 1u);
+  EXPECT_EQ(off[0].box.x0, near.box.x0);
 }
 
 // A percept as the proposer and RobotNet would give it with its feet at `feet` (the proposer's

@@ -22,6 +22,13 @@ struct RobotDetectorParams {
   /// A held-back candidate's patch holds parts of the nearer boxes RobotNet rejected, which may
   /// be a robot RobotNet missed: it becomes a percept only at this robot probability or more.
   double min_held_back_confidence = 0.7;
+  /// A held-back candidate behind a nearer box RobotNet accepted is a robot standing behind that
+  /// one (its feet at the nearer robot's knees or hands in the image), or the nearer robot's own
+  /// knee, crotch or hand. It is classified too and takes part in the choice of percepts at this
+  /// robot probability or more, unless another box RobotNet accepted lies max_inside_fraction
+  /// inside its box (its patch then holds that robot, not one standing at its feet point, and the
+  /// robot would become its part). 1: such candidates are not classified.
+  double min_behind_robot_confidence = 0.97;
   /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
   /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
   /// stand at the knees or thighs, its box too high. The lit stretch below the feet at most this
@@ -78,8 +85,9 @@ class RobotDetector {
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
                                 const std::vector<RobotProposal>& proposals,
                                 std::vector<float>* confidences = nullptr) const;
-  /// The same, and then the held-back candidates none of whose nearer proposals RobotNet accepted
-  /// (what a box without a robot seemed to hide is free), accepted from min_held_back_confidence.
+  /// The same, and then the held-back candidates: those none of whose nearer proposals RobotNet
+  /// accepted (what a box without a robot seemed to hide is free), accepted from
+  /// min_held_back_confidence; the others (behind a robot) as min_behind_robot_confidence says.
   /// `classified` (optional) gets every proposal RobotNet saw: `proposals`, then those held-back
   /// ones; `confidences` one output each.
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
