@@ -216,6 +216,12 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     net_.classify(image, boxes, probs);
     for (std::size_t i = 0; i < boxes.size(); ++i) robot.push_back(probs[2 * i + 1]);
   };
+  // With candidates behind robots looked at, every held-back candidate is classified: all in one
+  // batch with the proposals.
+  const bool all_held_back = params_.min_behind_robot_confidence < 1;
+  if (all_held_back) {
+    for (const HeldBackRobotProposal& h : held_back) seen.push_back(h.proposal);
+  }
   classify(0);
   // Per classified held-back candidate: whether a nearer box it stands behind holds a robot.
   std::vector<bool> behind_robot;
@@ -227,12 +233,14 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       }
       free &= robot[k] < params_.min_confidence;
     }
-    if (free || params_.min_behind_robot_confidence < 1) {
-      seen.push_back(h.proposal);
+    if (all_held_back) {
       behind_robot.push_back(!free);
+    } else if (free) {
+      seen.push_back(h.proposal);
+      behind_robot.push_back(false);
     }
   }
-  classify(proposals.size());
+  classify(robot.size());
   std::vector<PixelBox> proposal_boxes;
   proposal_boxes.reserve(seen.size());
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
