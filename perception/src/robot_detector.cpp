@@ -246,14 +246,21 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
   // Held-back boxes under their own bar take no part in the choice. Nor does a box behind a robot
   // with another box RobotNet accepted inside it: its patch holds the nearer robot's body and that
-  // robot, which would become its part.
+  // robot, which would become its part. (Boxes behind a robot are there only when every held-back
+  // candidate was classified, in held_back's order.)
   std::vector<float> accepted = robot;
   for (std::size_t i = proposals.size(); i < seen.size(); ++i) {
     if (!behind_robot[i - proposals.size()]) {
       if (accepted[i] < params_.min_held_back_confidence) accepted[i] = 0;
       continue;
     }
+    // Nor one overlapping an accepted box it stands behind as two robots' boxes overlap: it is that
+    // robot's knee or hand, which RobotNet may score higher than the robot.
     bool holds_one = false;
+    for (int k : held_back[i - proposals.size()].nearer) {
+      holds_one |= robot[k] >= params_.min_confidence &&
+                   boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou;
+    }
     for (std::size_t k = 0; k < seen.size() && !holds_one; ++k) {
       const bool other_accepted =
           k < proposals.size() ? robot[k] >= params_.min_confidence

@@ -667,6 +667,31 @@ TEST(RobotDetector, ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOther
   EXPECT_EQ(off[0].box.x0, near.box.x0);
 }
 
+TEST(RobotDetector, ABoxBehindARobotOverlappingItLikeARobotIsItsKneeOrHand) {
+  // The near robot's box reaches past the lit body onto the carpet; the held-back box at its knee
+  // lies wholly on the body, and RobotNet is surer of it than of the robot.
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(300, 60), cv::Point(620, 300), cv::Scalar(200), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const auto proposal = [](const PixelBox& box) {
+    RobotProposal p;
+    p.box = box;
+    p.feet_px = {(box.x0 + box.x1) / 2, box.y1};
+    return p;
+  };
+  const RobotProposal near = proposal(pixelBox(290, 100, 350, 200));
+  const RobotProposal knee = proposal(pixelBox(300, 110, 360, 210));  // IoU 0.6 with the near box
+  std::vector<RobotProposal> classified;
+  std::vector<float> confidences;
+  const auto robots = brightnessDetector().run(img.view(), cam, {near}, {{knee, {0}}}, &classified,
+                                               &confidences);
+  ASSERT_EQ(confidences.size(), 2u);
+  EXPECT_GT(confidences[0], 0.97f);
+  EXPECT_GT(confidences[1], confidences[0]);
+  ASSERT_EQ(robots.size(), 1u);
+  EXPECT_EQ(robots[0].box.x0, near.box.x0);
+}
+
 // A percept as the proposer and RobotNet would give it with its feet at `feet` (the proposer's
 // box: 1.25 robot widths, 1.08 heights, 0.04 of a height below the feet).
 RobotPercept perceptAt(const CameraModel& cam, const Eigen::Vector2d& feet) {
