@@ -27,7 +27,9 @@ struct RobotDetectorParams {
   /// knee, crotch or hand. It is classified too and takes part in the choice of percepts at this
   /// robot probability or more, unless another box RobotNet accepted lies max_inside_fraction
   /// inside its box (its patch then holds that robot, not one standing at its feet point, and the
-  /// robot would become its part). 1: such candidates are not classified.
+  /// robot would become its part), or it overlaps an accepted box it stands behind by more than
+  /// max_overlap_iou (it is that robot's knee or hand, which RobotNet may score higher than the
+  /// robot). 1: such candidates are not classified.
   double min_behind_robot_confidence = 0.97;
   /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
   /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
