@@ -562,6 +562,14 @@ TEST(RobotDetector, KeptBoxesDropOverlapsAndPartsOfALargerRobot) {
   EXPECT_THROW(keptRobotBoxes({robot}, {}, p), Error);
 }
 
+// A proposal with this box, its feet point at the middle of the box's lower edge.
+RobotProposal proposal(const PixelBox& box) {
+  RobotProposal p;
+  p.box = box;
+  p.feet_px = {(box.x0 + box.x1) / 2, box.y1};
+  return p;
+}
+
 // A stand-in for RobotNet: its robot probability is sigmoid(40 (patch mean / 255) - 20), above
 // 0.5 on patches brighter than mid-gray.
 RobotDetector brightnessDetector(const RobotDetectorParams& params = {}) {
@@ -577,12 +585,6 @@ TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) 
   GrayImage img = carpet(11);
   cv::rectangle(wrap(img), cv::Point(400, 100), cv::Point(460, 220), cv::Scalar(230), cv::FILLED);
   const CameraModel cam = testCamera();
-  const auto proposal = [](const PixelBox& box) {
-    RobotProposal p;
-    p.box = box;
-    p.feet_px = {(box.x0 + box.x1) / 2, box.y1};
-    return p;
-  };
   const RobotProposal carpet_box = proposal(pixelBox(100, 100, 300, 420));  // no robot
   const RobotProposal bright_box = proposal(pixelBox(395, 95, 465, 225));   // a robot
   const RobotProposal behind = proposal(pixelBox(405, 105, 455, 215));      // held back
@@ -631,12 +633,6 @@ TEST(RobotDetector, ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOther
   cv::rectangle(wrap(img), cv::Point(300, 60), cv::Point(620, 300), cv::Scalar(200), cv::FILLED);
   cv::rectangle(wrap(img), cv::Point(100, 320), cv::Point(200, 440), cv::Scalar(142), cv::FILLED);
   const CameraModel cam = testCamera();
-  const auto proposal = [](const PixelBox& box) {
-    RobotProposal p;
-    p.box = box;
-    p.feet_px = {(box.x0 + box.x1) / 2, box.y1};
-    return p;
-  };
   const RobotProposal near = proposal(pixelBox(400, 100, 460, 200));    // a robot (probability ~1)
   const RobotProposal beside = proposal(pixelBox(480, 120, 540, 220));  // ~1, overlaps nothing
   const RobotProposal around = proposal(pixelBox(320, 70, 600, 290));   // ~1, the near box inside it
@@ -673,12 +669,6 @@ TEST(RobotDetector, ABoxBehindARobotOverlappingItLikeARobotIsItsKneeOrHand) {
   GrayImage img = carpet(11);
   cv::rectangle(wrap(img), cv::Point(300, 60), cv::Point(620, 300), cv::Scalar(200), cv::FILLED);
   const CameraModel cam = testCamera();
-  const auto proposal = [](const PixelBox& box) {
-    RobotProposal p;
-    p.box = box;
-    p.feet_px = {(box.x0 + box.x1) / 2, box.y1};
-    return p;
-  };
   const RobotProposal near = proposal(pixelBox(290, 100, 350, 200));
   const RobotProposal knee = proposal(pixelBox(300, 110, 360, 210));  // IoU 0.6 with the near box
   std::vector<RobotProposal> classified;
