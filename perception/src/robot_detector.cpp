@@ -256,20 +256,20 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     }
     // Nor one overlapping an accepted box it stands behind as two robots' boxes overlap: it is that
     // robot's knee or hand, which RobotNet may score higher than the robot.
-    bool holds_one = false;
+    bool excluded = false;
     for (int k : held_back[i - proposals.size()].nearer) {
-      holds_one |= robot[k] >= params_.min_confidence &&
+      excluded |= robot[k] >= params_.min_confidence &&
                    boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou;
     }
-    for (std::size_t k = 0; k < seen.size() && !holds_one; ++k) {
+    for (std::size_t k = 0; k < seen.size() && !excluded; ++k) {
       const bool other_accepted =
           k < proposals.size() ? robot[k] >= params_.min_confidence
                                : !behind_robot[k - proposals.size()] &&
                                      robot[k] >= params_.min_held_back_confidence;
-      holds_one = other_accepted &&
+      excluded = other_accepted &&
                   insideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
     }
-    if (accepted[i] < params_.min_behind_robot_confidence || holds_one) accepted[i] = 0;
+    if (accepted[i] < params_.min_behind_robot_confidence || excluded) accepted[i] = 0;
   }
   std::vector<RobotPercept> out;
   for (int i : keptRobotBoxes(proposal_boxes, accepted, params_)) {
