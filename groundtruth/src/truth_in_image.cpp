@@ -221,14 +221,6 @@ double pointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
   return (p - (a + t * d)).norm();
 }
 
-double boxIou(const PixelBox& a, const PixelBox& b) {
-  const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
-  const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
-  const double inter = ix * iy;
-  const double uni = a.width() * a.height() + b.width() * b.height() - inter;
-  return uni > 0 ? inter / uni : 0.0;
-}
-
 FrameProjector::FrameProjector(const CameraTruth& camera)
     : intrinsics_(camera.model.intrinsics()),
       camera_to_field_(camera.camera_to_field),

@@ -54,13 +54,6 @@ RobotDetector RobotDetector::loadDefault() {
 }
 
 namespace {
-double boxIou(const PixelBox& a, const PixelBox& b) {
-  const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
-  const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
-  const double inter = ix * iy;
-  const double uni = a.width() * a.height() + b.width() * b.height() - inter;
-  return uni > 0 ? inter / uni : 0;
-}
 // The fraction of a's area inside b.
 double insideFraction(const PixelBox& a, const PixelBox& b) {
   const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));

@@ -271,14 +271,6 @@ int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int w
   return beside && y + 1 - stripe_top <= max_stripe_px() ? stripe_top - 1 : -1;
 }
 
-double iou(const PixelBox& a, const PixelBox& b) {
-  const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
-  const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
-  const double inter = ix * iy;
-  const double uni = a.width() * a.height() + b.width() * b.height() - inter;
-  return uni > 0 ? inter / uni : 0;
-}
-
 }  // namespace
 
 RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& camera,
@@ -516,7 +508,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
       const bool in_column = f.x() > kept.box.x0 && f.x() < kept.box.x1;
       const bool below_top = f.y() < kept.feet_px.y() - 0.1 * kept_h;
       const bool lower_part = f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h;
-      if (iou(kept.box, c.proposal.box) > p.max_overlap_iou) return Fit::kOverlap;
+      if (boxIou(kept.box, c.proposal.box) > p.max_overlap_iou) return Fit::kOverlap;
       if (in_column && below_top && lower_part) {
         nearer.push_back(static_cast<int>(k));
       } else if (in_column && below_top && f.y() > kept.box.y0) {

@@ -129,6 +129,6 @@ std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points);
 bool insideConvex(const std::vector<Eigen::Vector2d>& hull, const Eigen::Vector2d& p);
 double pointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
                             const Eigen::Vector2d& b);
-double boxIou(const PixelBox& a, const PixelBox& b);
+// boxIou: colorfree/perception/percepts.h.
 
 }  // namespace colorfree
