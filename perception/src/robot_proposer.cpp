@@ -28,6 +28,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.line_beside_width_factor = f.getInRange("line_beside_width_factor", 0, 10);
   p.knee_gap_height_fraction = f.getInRange("knee_gap_height_fraction", 0, 1);
   p.knee_min_lit_height_fraction = f.getInRange("knee_min_lit_height_fraction", 0, 1);
+  p.max_knee_proposals = static_cast<int>(f.getInRange("max_knee_proposals", 0, 100));
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
   p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
@@ -164,6 +165,7 @@ struct RobotRun {
   /// Where the run bridged a knee gap, the run's top below the gap (where the scan goes on when
   /// the run is rejected); -1: no knee gap.
   int below_knee_top = -1;
+  int filled_below_knee = 0;  ///< filled rows below the knee gap (where it was bridged)
 };
 
 // The knee gap a run may bridge once (rows; 0: none), and the test of the lit stretch below it.
@@ -210,6 +212,7 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
     if (lit || shaded) {
       if (gap_limit > max_gap) {  // the end of the knee gap
         out.below_knee_top = run_top;
+        out.filled_below_knee = filled;
         gap_limit = max_gap;
       }
       ++filled;
@@ -285,7 +288,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   const int win = regions.window_px;
   const double width_per_height = robot_width_m_ / robot_height_m_;
 
-  std::vector<FeetPoint> feet;
+  std::vector<FeetPoint> feet, knee_feet;
   const int step = p.column_step_px;
   // The frame's noise raises the jump (each scan pixel is compared on its own).
   const double min_jump =
@@ -378,6 +381,10 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           const RobotRun run = robotRun(column, stride, y, feet_y, needed, max_gap, lit, carpet,
                                         carpet_unknown, knee);
           const int run_top = run.top, filled = run.filled;
+          // Where only the bridged run makes a feet point, with knee candidates apart, the point
+          // goes to them and the scan goes on as it would without the gap.
+          const bool knee_apart = p.max_knee_proposals > 0 && run.below_knee_top >= 0 &&
+                                  run.filled_below_knee < p.min_fill_fraction * needed;
           if (*expected < p.min_expected_height_px) {
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kTooFar});
           } else if (filled >= p.min_fill_fraction * needed) {
@@ -390,22 +397,27 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
                                             linePx(camera, feet_px, line_width_m_);
                                    })
                     : -1;
-            if (above_line >= 0) {
+            if (above_line >= 0 && !knee_apart) {
               if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kFieldLine});
               y = above_line;
               continue;
             }
-            // A dark stretch just below the bright feet (a joint's gap away at most) and no
-            // taller than a foot is the feet's dark lower part or their contact shadow: the
-            // robot stands at its bottom. (The darker reference after it hides those rows from
-            // the brightness test; the orientation stage's feet region hangs from this row.)
-            if (dark_top >= 0 && dark_top - y <= p.max_gap_px + 1 &&
-                dark_bottom + 1 - feet_y <= p.feet_dark_height_fraction * *expected) {
-              feet_y = dark_bottom + 1;
+            if (above_line < 0) {
+              // A dark stretch just below the bright feet (a joint's gap away at most) and no
+              // taller than a foot is the feet's dark lower part or their contact shadow: the
+              // robot stands at its bottom. (The darker reference after it hides those rows
+              // from the brightness test; the orientation stage's feet region hangs from this
+              // row.)
+              if (dark_top >= 0 && dark_top - y <= p.max_gap_px + 1 &&
+                  dark_bottom + 1 - feet_y <= p.feet_dark_height_fraction * *expected) {
+                feet_y = dark_bottom + 1;
+              }
+              (knee_apart ? knee_feet : feet).push_back({x, feet_y, *expected});
+              out.feet_points_px.push_back({x + 0.5, static_cast<double>(feet_y)});
+              if (!knee_apart) break;  // one robot per scan line stretch: the lowest
             }
-            feet.push_back({x, feet_y, *expected});
-            out.feet_points_px.push_back({x + 0.5, static_cast<double>(feet_y)});
-            break;  // one robot per scan line stretch: the lowest
+            // (Without the gap the run was too short.)
+            if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kRunTooShort});
           } else if (keep_rejected) {
             out.rejected.push_back({feet_px, RobotRejectReason::kRunTooShort});
           }
@@ -416,80 +428,81 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     }
   }
 
-  // Join feet points of neighbouring scan lines (they arrive sorted by x).
-  std::vector<Group> groups;
-  std::vector<int> open;
-  for (const FeetPoint& f : feet) {
-    int best = -1;
-    double best_dy = 0;
-    for (int gi : open) {
-      Group& g = groups[gi];
-      const double max_gap = std::max(2.0 * step, p.join_gap_width_fraction * g.expected_h * width_per_height);
-      if (g.last_x < f.x - max_gap || g.last_x == f.x) continue;
-      const double tol = p.join_height_fraction * g.expected_h + 2;
-      const double dy = std::abs(f.y - g.last_y);
-      if (dy <= tol && (best < 0 || dy < best_dy)) {
-        best = gi;
-        best_dy = dy;
-      }
-    }
-    if (best < 0) {
-      groups.push_back({f.x, f.x, {f.y}, f.expected_h, f.y});
-      open.push_back(static_cast<int>(groups.size()) - 1);
-    } else {
-      Group& g = groups[best];
-      g.last_x = f.x;
-      g.last_y = f.y;
-      g.ys.push_back(f.y);
-      g.expected_h = std::max(g.expected_h, f.expected_h);
-    }
-    open.erase(std::remove_if(open.begin(), open.end(),
-                              [&](int gi) {
-                                return groups[gi].last_x <
-                                       f.x - std::max(2.0 * step, p.join_gap_width_fraction *
-                                                                      groups[gi].expected_h *
-                                                                      width_per_height);
-                              }),
-               open.end());
-  }
-
   struct Candidate {
     RobotProposal proposal;
     double expected_h;
     bool wide_group;  ///< from a group wider than defer_width_factor robots: deferred under the cap
   };
-  std::vector<Candidate> candidates;
-  for (Group& g : groups) {
-    std::nth_element(g.ys.begin(), g.ys.begin() + g.ys.size() / 2, g.ys.end());
-    const int feet_y = g.ys[g.ys.size() / 2];
-    const double cx = (g.first_x + g.last_x + 1) / 2.0;
-    const auto h = camera.robotHeightPx({cx, static_cast<double>(feet_y)}, robot_height_m_);
-    if (!h) continue;
-    const double w_expected = *h * width_per_height;
-    const double w = g.last_x - g.first_x + step;
-    if (w < p.min_width_fraction * w_expected) {
-      if (keep_rejected) out.rejected.push_back({{cx, double(feet_y)}, RobotRejectReason::kTooNarrow});
-      continue;
+  // Join feet points of neighbouring scan lines (they arrive sorted by x) into groups, and the
+  // groups wide enough for a robot into candidates.
+  const auto candidatesOf = [&](const std::vector<FeetPoint>& points) {
+    std::vector<Group> groups;
+    std::vector<int> open;
+    const auto max_join_gap = [&](const Group& g) {
+      return std::max(2.0 * step, p.join_gap_width_fraction * g.expected_h * width_per_height);
+    };
+    for (const FeetPoint& f : points) {
+      int best = -1;
+      double best_dy = 0;
+      for (int gi : open) {
+        Group& g = groups[gi];
+        if (g.last_x < f.x - max_join_gap(g) || g.last_x == f.x) continue;
+        const double tol = p.join_height_fraction * g.expected_h + 2;
+        const double dy = std::abs(f.y - g.last_y);
+        if (dy <= tol && (best < 0 || dy < best_dy)) {
+          best = gi;
+          best_dy = dy;
+        }
+      }
+      if (best < 0) {
+        groups.push_back({f.x, f.x, {f.y}, f.expected_h, f.y});
+        open.push_back(static_cast<int>(groups.size()) - 1);
+      } else {
+        Group& g = groups[best];
+        g.last_x = f.x;
+        g.last_y = f.y;
+        g.ys.push_back(f.y);
+        g.expected_h = std::max(g.expected_h, f.expected_h);
+      }
+      open.erase(std::remove_if(open.begin(), open.end(),
+                                [&](int gi) { return groups[gi].last_x < f.x - max_join_gap(groups[gi]); }),
+                 open.end());
     }
-    const int n = w > p.split_width_factor * w_expected
-                      ? std::max(1, static_cast<int>(std::lround(w / w_expected)))
-                      : 1;
-    for (int i = 0; i < n; ++i) {
-      const double x = g.first_x + (i + 0.5) * w / n;
-      RobotProposal rp;
-      rp.feet_px = {x, static_cast<double>(feet_y)};
-      const double bw = p.box_width_factor * w_expected;
-      rp.box.x0 = x - bw / 2;
-      rp.box.x1 = x + bw / 2;
-      rp.box.y1 = feet_y + p.box_below_feet_fraction * *h;
-      rp.box.y0 = rp.box.y1 - p.box_height_factor * *h;
-      candidates.push_back({rp, *h, w > p.defer_width_factor * w_expected});
+    std::vector<Candidate> candidates;
+    for (Group& g : groups) {
+      std::nth_element(g.ys.begin(), g.ys.begin() + g.ys.size() / 2, g.ys.end());
+      const int feet_y = g.ys[g.ys.size() / 2];
+      const double cx = (g.first_x + g.last_x + 1) / 2.0;
+      const auto h = camera.robotHeightPx({cx, static_cast<double>(feet_y)}, robot_height_m_);
+      if (!h) continue;
+      const double w_expected = *h * width_per_height;
+      const double w = g.last_x - g.first_x + step;
+      if (w < p.min_width_fraction * w_expected) {
+        if (keep_rejected) out.rejected.push_back({{cx, double(feet_y)}, RobotRejectReason::kTooNarrow});
+        continue;
+      }
+      const int n = w > p.split_width_factor * w_expected
+                        ? std::max(1, static_cast<int>(std::lround(w / w_expected)))
+                        : 1;
+      for (int i = 0; i < n; ++i) {
+        const double x = g.first_x + (i + 0.5) * w / n;
+        RobotProposal rp;
+        rp.feet_px = {x, static_cast<double>(feet_y)};
+        const double bw = p.box_width_factor * w_expected;
+        rp.box.x0 = x - bw / 2;
+        rp.box.x1 = x + bw / 2;
+        rp.box.y1 = feet_y + p.box_below_feet_fraction * *h;
+        rp.box.y0 = rp.box.y1 - p.box_height_factor * *h;
+        candidates.push_back({rp, *h, w > p.defer_width_factor * w_expected});
+      }
     }
-  }
-  // Lower in the image first (nearer robots hide the ones behind).
-  std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-    return a.proposal.feet_px.y() > b.proposal.feet_px.y();
-  });
+    // Lower in the image first (nearer robots hide the ones behind).
+    std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      return a.proposal.feet_px.y() > b.proposal.feet_px.y();
+    });
+    return candidates;
+  };
+  const std::vector<Candidate> candidates = candidatesOf(feet);
   // A candidate overlapping a kept one by more than max_overlap_iou is dropped. One whose feet
   // point lies inside the lower part of nearer robots' boxes is their knee, hip or hand, or a
   // robot beside or behind them: it is held back for the detector, which classifies it only when
@@ -549,6 +562,21 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   }
   for (const Candidate* c : behind) keep(*c, false);
   for (const Candidate* c : wide) keep(*c, false);
+  // The knee-bridged candidates, besides the others and under their own cap, held back as
+  // the others are.
+  int knee_kept = 0;
+  for (const Candidate& c : candidatesOf(knee_feet)) {
+    const Fit f = fit(c);
+    if (f == Fit::kHeldBack && static_cast<int>(out.held_back.size()) < p.max_held_back) {
+      out.held_back.push_back({c.proposal, nearer});
+    } else if (f == Fit::kFree || f == Fit::kBehind) {
+      if (knee_kept >= p.max_knee_proposals) break;
+      out.proposals.push_back(c.proposal);
+      ++knee_kept;
+    } else if (keep_rejected) {
+      out.rejected.push_back({c.proposal.feet_px, RobotRejectReason::kOverlap});
+    }
+  }
   return out;
 }
 

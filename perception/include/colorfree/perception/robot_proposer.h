@@ -59,10 +59,15 @@ struct RobotProposerParams {
   /// knee_min_lit_height_fraction of the height tall and has lit pixels
   /// line_beside_width_factor robot widths to its left or right on at most half of its rows
   /// (feet end within their robot's width; the carpet's lit side of a light edge runs on).
-  /// 0: no knee gap (the shipped value: an option for backlit halls, README "Robots and
-  /// orientation", robot11; 0.10 lifts directional light and loses robots elsewhere).
-  double knee_gap_height_fraction = 0;
+  /// 0: no knee gap (README "Robots and orientation", robot11 and robot14).
+  double knee_gap_height_fraction = 0.10;
   double knee_min_lit_height_fraction = 0.10;
+  /// With a knee gap: where only the bridged run makes a feet point, the point is a candidate of
+  /// its own, grouped apart from the others, and the scan goes on as without the gap; up to this
+  /// many such boxes are proposed besides the others (held back as they are), which stay those
+  /// found without the gap. 0: bridged runs give feet points like any other (robot11's way, which
+  /// moved other robots' boxes).
+  int max_knee_proposals = 4;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
   /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
   /// of the expected height (plus 2 px).
