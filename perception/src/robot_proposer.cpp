@@ -76,6 +76,7 @@ struct FeetPoint {
   int x = 0;
   int y = 0;               // first row below the run (the feet's lower edge)
   double expected_h = 0;   // expected robot height there, px
+  bool knee = false;       // only a run bridging a knee gap makes it
 };
 
 struct Group {
@@ -83,6 +84,7 @@ struct Group {
   std::vector<int> ys;
   double expected_h = 0;
   int last_y = 0;
+  bool knee = false;  ///< holds a knee-bridged feet point
 };
 
 struct ScanConstants {
@@ -288,7 +290,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   const int win = regions.window_px;
   const double width_per_height = robot_width_m_ / robot_height_m_;
 
-  std::vector<FeetPoint> feet, knee_feet;
+  std::vector<FeetPoint> feet, knee_feet;  // (knee_feet: those only a bridged run makes)
   const int step = p.column_step_px;
   // The frame's noise raises the jump (each scan pixel is compared on its own).
   const double min_jump =
@@ -412,7 +414,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
                   dark_bottom + 1 - feet_y <= p.feet_dark_height_fraction * *expected) {
                 feet_y = dark_bottom + 1;
               }
-              (knee_apart ? knee_feet : feet).push_back({x, feet_y, *expected});
+              (knee_apart ? knee_feet : feet).push_back({x, feet_y, *expected, knee_apart});
               out.feet_points_px.push_back({x + 0.5, static_cast<double>(feet_y)});
               if (!knee_apart) break;  // one robot per scan line stretch: the lowest
             }
@@ -433,9 +435,9 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     double expected_h;
     bool wide_group;  ///< from a group wider than defer_width_factor robots: deferred under the cap
   };
-  // Join feet points of neighbouring scan lines (they arrive sorted by x) into groups, and the
-  // groups wide enough for a robot into candidates.
-  const auto candidatesOf = [&](const std::vector<FeetPoint>& points) {
+  // Join feet points of neighbouring scan lines (sorted by x) into groups, and the groups wide
+  // enough for a robot (knee_only: and holding a knee-bridged point) into candidates.
+  const auto candidatesOf = [&](const std::vector<FeetPoint>& points, bool knee_only) {
     std::vector<Group> groups;
     std::vector<int> open;
     const auto max_join_gap = [&](const Group& g) {
@@ -455,13 +457,14 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         }
       }
       if (best < 0) {
-        groups.push_back({f.x, f.x, {f.y}, f.expected_h, f.y});
+        groups.push_back({f.x, f.x, {f.y}, f.expected_h, f.y, f.knee});
         open.push_back(static_cast<int>(groups.size()) - 1);
       } else {
         Group& g = groups[best];
         g.last_x = f.x;
         g.last_y = f.y;
         g.ys.push_back(f.y);
+        g.knee |= f.knee;
         g.expected_h = std::max(g.expected_h, f.expected_h);
       }
       open.erase(std::remove_if(open.begin(), open.end(),
@@ -470,6 +473,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     }
     std::vector<Candidate> candidates;
     for (Group& g : groups) {
+      if (knee_only && !g.knee) continue;
       std::nth_element(g.ys.begin(), g.ys.begin() + g.ys.size() / 2, g.ys.end());
       const int feet_y = g.ys[g.ys.size() / 2];
       const double cx = (g.first_x + g.last_x + 1) / 2.0;
@@ -502,7 +506,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     });
     return candidates;
   };
-  const std::vector<Candidate> candidates = candidatesOf(feet);
+  const std::vector<Candidate> candidates = candidatesOf(feet, false);
   // A candidate overlapping a kept one by more than max_overlap_iou is dropped. One whose feet
   // point lies inside the lower part of nearer robots' boxes is their knee, hip or hand, or a
   // robot beside or behind them: it is held back for the detector, which classifies it only when
@@ -511,7 +515,14 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   // candidate, so near robots' arms do not take the places of far robots under the cap.
   enum class Fit { kFree, kBehind, kHeldBack, kOverlap };
   std::vector<int> nearer;
-  const auto fit = [&](const Candidate& c) {
+  // A knee candidate (knee: true) overlaps only boxes standing about as low as it does: a box
+  // higher up is the same robot's without the gap, its feet at the knees, and RobotNet decides.
+  const auto overlaps = [&](const RobotProposal& kept, const Candidate& c, bool knee) {
+    return boxIou(kept.box, c.proposal.box) > p.max_overlap_iou &&
+           (!knee || kept.feet_px.y() >=
+                         c.proposal.feet_px.y() - (p.join_height_fraction * c.expected_h + 2));
+  };
+  const auto fit = [&](const Candidate& c, bool knee) {
     Fit result = Fit::kFree;
     nearer.clear();
     for (std::size_t k = 0; k < out.proposals.size(); ++k) {
@@ -521,7 +532,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
       const bool in_column = f.x() > kept.box.x0 && f.x() < kept.box.x1;
       const bool below_top = f.y() < kept.feet_px.y() - 0.1 * kept_h;
       const bool lower_part = f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h;
-      if (boxIou(kept.box, c.proposal.box) > p.max_overlap_iou) return Fit::kOverlap;
+      if (overlaps(kept, c, knee)) return Fit::kOverlap;
       if (in_column && below_top && lower_part) {
         nearer.push_back(static_cast<int>(k));
       } else if (in_column && below_top && f.y() > kept.box.y0) {
@@ -532,7 +543,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   };
   std::vector<const Candidate*> behind, wide;
   const auto keep = [&](const Candidate& c, bool may_defer) {
-    const Fit f = fit(c);
+    const Fit f = fit(c, false);
     if (f == Fit::kBehind && may_defer) {
       behind.push_back(&c);
       return;
@@ -565,8 +576,17 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   // The knee-bridged candidates, besides the others and under their own cap, held back as
   // the others are.
   int knee_kept = 0;
-  for (const Candidate& c : candidatesOf(knee_feet)) {
-    const Fit f = fit(c);
+  // Grouped with the other feet points: a robot whose feet only some scan lines reach over the
+  // knee gap is one group, not two too narrow for a robot.
+  if (knee_feet.empty()) return out;
+  std::vector<FeetPoint> all_feet(feet.size() + knee_feet.size());
+  std::merge(feet.begin(), feet.end(), knee_feet.begin(), knee_feet.end(), all_feet.begin(),
+             [](const FeetPoint& a, const FeetPoint& b) { return a.x < b.x; });
+  for (const Candidate& c : candidatesOf(all_feet, true)) {
+    // (One overlapping a held-back candidate is that candidate again, a bridged point joined.)
+    bool again = false;
+    for (const HeldBackRobotProposal& h : out.held_back) again |= overlaps(h.proposal, c, true);
+    const Fit f = again ? Fit::kOverlap : fit(c, true);
     if (f == Fit::kHeldBack && static_cast<int>(out.held_back.size()) < p.max_held_back) {
       out.held_back.push_back({c.proposal, nearer});
     } else if (f == Fit::kFree || f == Fit::kBehind) {

@@ -470,6 +470,33 @@ TEST(RobotProposer, BacklitKneeAtTheCarpetsGrayDoesNotLiftTheFeet) {
   EXPECT_LT(joined_out.proposals.size(), out.proposals.size()) << describe(joined_out);
 }
 
+TEST(RobotProposer, FeetReachedOverTheKneeOnlyInPartJoinTheOthers) {
+  // The legs, blurred by the walk, one lit stretch 0.3 of the robot's width; the shaded knee at
+  // the carpet's gray across its left half only. The right half's scan lines find the feet
+  // without the knee gap, the left half's only over it: each half alone is narrower than a
+  // robot's group (0.2 of its width), the two together make one box at the feet.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(22);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.8, 0.1});
+  const auto [h, w] = robotSizePx(cam, feet);
+  cv::Mat m = wrap(img);
+  cv::rectangle(m, cv::Point(int(feet.x() - 0.42 * w), int(feet.y() - 0.37 * h)),
+                cv::Point(int(feet.x() + 0.42 * w), int(feet.y()) - 1), cv::Scalar(60), cv::FILLED);
+  cv::rectangle(m, cv::Point(int(feet.x() - 0.15 * w), int(feet.y() - 0.37 * h)),
+                cv::Point(int(feet.x() + 0.15 * w), int(feet.y()) - 1), cv::Scalar(170), cv::FILLED);
+  const int knee_bottom = int(feet.y() - 0.15 * h), knee_top = int(feet.y() - 0.23 * h);
+  cv::rectangle(m, cv::Point(int(feet.x() - 0.15 * w), knee_top), cv::Point(int(feet.x()), knee_bottom),
+                cv::Scalar(60), cv::FILLED);
+  const RobotProposals out = propose(img, cam);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+  // Neither half makes a robot's group on its own.
+  int narrow_at_feet = 0;
+  for (const RejectedRobotCandidate& r : out.rejected) {
+    narrow_at_feet += r.reason == RobotRejectReason::kTooNarrow && std::abs(r.feet_px.y() - feet.y()) <= 2;
+  }
+  EXPECT_GE(narrow_at_feet, 1) << describe(out);
+}
+
 TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   // The carpet lit brighter across the image (overexposed light: a bright stripe) a knee's gap
   // below a robot: the stripe runs on beside the robot, so its gap to the legs is no knee, and
