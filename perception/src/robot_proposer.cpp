@@ -573,12 +573,11 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   }
   for (const Candidate* c : behind) keep(*c, false);
   for (const Candidate* c : wide) keep(*c, false);
-  // The knee-bridged candidates, besides the others and under their own cap, held back as
-  // the others are.
-  int knee_kept = 0;
-  // Grouped with the other feet points: a robot whose feet only some scan lines reach over the
-  // knee gap is one group, not two too narrow for a robot.
+  // The knee candidates: groups of all feet points that hold a knee-bridged one (a robot whose
+  // feet only some scan lines reach over the knee gap is one group, not two too narrow for a
+  // robot), besides the others under their own cap, held back as the others are.
   if (knee_feet.empty()) return out;
+  int knee_kept = 0;
   std::vector<FeetPoint> all_feet(feet.size() + knee_feet.size());
   std::merge(feet.begin(), feet.end(), knee_feet.begin(), knee_feet.end(), all_feet.begin(),
              [](const FeetPoint& a, const FeetPoint& b) { return a.x < b.x; });

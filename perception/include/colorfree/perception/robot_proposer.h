@@ -120,7 +120,7 @@ struct RejectedRobotCandidate {
 struct RobotProposals {
   std::vector<RobotProposal> proposals;
   /// Candidates in the lower part of nearer proposals' boxes (see own_body_height_fraction),
-  /// lowest first.
+  /// lowest first, then the knee candidates among them (see max_knee_proposals).
   std::vector<HeldBackRobotProposal> held_back;
   /// Feet points (lower ends of long enough runs) found by the scan lines, for drawing.
   std::vector<Eigen::Vector2d> feet_points_px;
