@@ -431,6 +431,16 @@ RobotProposerParams kneeGapParams() {
   return p;
 }
 
+// A knee joint in its own shade at the carpet's gray (60), 0.15 to 0.23 of the robot's height above
+// its feet (longer than a run's gap), from left_w to right_w robot widths beside the feet.
+void shadeKnee(GrayImage& img, const Eigen::Vector2d& feet, double h, double w, double left_w,
+               double right_w) {
+  const int knee_bottom = int(feet.y() - 0.15 * h), knee_top = int(feet.y() - 0.23 * h);
+  ASSERT_GT(knee_bottom - knee_top, 0.04 * h + 3);
+  cv::rectangle(wrap(img), cv::Point(int(feet.x() + left_w * w), knee_top),
+                cv::Point(int(feet.x() + right_w * w), knee_bottom), cv::Scalar(60), cv::FILLED);
+}
+
 TEST(RobotProposer, BacklitKneeAtTheCarpetsGrayDoesNotLiftTheFeet) {
   // Directional light from beyond the robot: its knee joints, in their own shade, at the carpet's
   // gray over 0.08 of its height between the lit shins and thighs. Without the knee gap the run
@@ -441,11 +451,7 @@ TEST(RobotProposer, BacklitKneeAtTheCarpetsGrayDoesNotLiftTheFeet) {
   GrayImage img = carpet(12);
   const Eigen::Vector2d feet = drawRobot(img, cam, {1.8, 0.1});
   const auto [h, w] = robotSizePx(cam, feet);
-  cv::Mat m = wrap(img);
-  const int knee_bottom = int(feet.y() - 0.15 * h), knee_top = int(feet.y() - 0.23 * h);
-  ASSERT_GT(knee_bottom - knee_top, 0.04 * h + 3);  // longer than the run's gap
-  cv::rectangle(m, cv::Point(int(feet.x() - 0.5 * w), knee_top),
-                cv::Point(int(feet.x() + 0.5 * w), knee_bottom), cv::Scalar(60), cv::FILLED);
+  shadeKnee(img, feet, h, w, -0.5, 0.5);
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
   const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
   const auto proposeWith = [&](const RobotProposerParams& p) {
@@ -484,9 +490,7 @@ TEST(RobotProposer, FeetReachedOverTheKneeOnlyInPartJoinTheOthers) {
                 cv::Point(int(feet.x() + 0.42 * w), int(feet.y()) - 1), cv::Scalar(60), cv::FILLED);
   cv::rectangle(m, cv::Point(int(feet.x() - 0.15 * w), int(feet.y() - 0.37 * h)),
                 cv::Point(int(feet.x() + 0.15 * w), int(feet.y()) - 1), cv::Scalar(170), cv::FILLED);
-  const int knee_bottom = int(feet.y() - 0.15 * h), knee_top = int(feet.y() - 0.23 * h);
-  cv::rectangle(m, cv::Point(int(feet.x() - 0.15 * w), knee_top), cv::Point(int(feet.x()), knee_bottom),
-                cv::Scalar(60), cv::FILLED);
+  shadeKnee(img, feet, h, w, -0.15, 0);
   const RobotProposals out = propose(img, cam);
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
   // Neither half makes a robot's group on its own.
