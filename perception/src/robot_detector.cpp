@@ -22,6 +22,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.shin_min_jump_gray = f.getInRange("shin_min_jump_gray", 1, 255);
   p.shin_jump_ratio = f.getInRange("shin_jump_ratio", 0, 1);
   p.shin_beside_width_factor = f.getInRange("shin_beside_width_factor", 0.1, 10);
+  p.shin_min_fill_fraction = f.getInRange("shin_min_fill_fraction", 0, 1);
   p.shin_min_span_width_fraction = f.getInRange("shin_min_span_width_fraction", 0, 5);
   p.shin_max_spread_height_fraction = f.getInRange("shin_max_spread_height_fraction", 0, 1);
   f.finish();
@@ -105,11 +106,12 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
     }
     if (gap > knee_rows || y > y_end) continue;
     const int top = y;
-    int holes = 0, last_lit = y;
+    int holes = 0, last_lit = y, lit_rows = 0;
     for (; y <= y_end && holes <= max_gap; ++y) {
       if (lit(x, y)) {
         last_lit = y;
         holes = 0;
+        ++lit_rows;
       } else {
         ++holes;
       }
@@ -119,6 +121,7 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
     const auto h = camera.robotHeightPx({x + 0.5, static_cast<double>(bottom)}, field.robot_height_m);
     const int tall = bottom - top;
     if (!h || tall < 0.1 * *h || tall > 0.45 * *h) continue;
+    if (lit_rows < params.shin_min_fill_fraction * tall) continue;
     int lit_beside = 0;
     for (int yy = top; yy < bottom; ++yy) {
       lit_beside += (x - beside >= 0 && lit(x - beside, yy)) ||

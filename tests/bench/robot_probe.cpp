@@ -76,6 +76,7 @@ int probe(int argc, char** argv) {
   env("RP_HELD", rpp.max_held_back);
   env("RD_HELD", config.robot_detector.min_held_back_confidence);
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
+  env("RD_SHINFILL", config.robot_detector.shin_min_fill_fraction);
   env("RP_BESIDE", rpp.beside_width_factor);
   env("RP_LINE", rpp.line_stripe_factor);
   env("RP_LINEB", rpp.line_beside_width_factor);

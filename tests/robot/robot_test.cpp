@@ -822,6 +822,28 @@ TEST(RobotDetector, ABallOrAFieldLineBelowTheFeetIsNoShin) {
   }
 }
 
+TEST(RobotDetector, AFieldLineInTheCarpetsNoiseIsNoShin) {
+  // A thin field line a knee's gap below the feet, and the noisy carpet's lit pixels around it:
+  // lit rows every 4 rows (closer than a run's gap) across the robot's width, from just below the
+  // feet to 0.3 of its height below them. The stretch is a shin's height and lit beside it on the
+  // line's rows only, but lit on under half of its rows: no shin. (At noise sigma 6 such a
+  // stretch took an accepted robot's feet 62 px down onto the line, camera_noise case 2.)
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(24);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {2.0, 0.0});
+  const auto [h, w] = robotSizePx(cam, feet);
+  const RobotPercept r = perceptAt(cam, feet);
+  cv::Mat m = wrap(img);
+  const int line_y = int(feet.y() + 0.10 * h);
+  cv::rectangle(m, cv::Point(0, line_y), cv::Point(639, line_y + int(0.04 * h)), cv::Scalar(220),
+                cv::FILLED);
+  for (int y = int(feet.y() + 0.04 * h); y < feet.y() + 0.3 * h; y += 4) {
+    cv::line(m, cv::Point(int(feet.x() - 0.5 * w), y), cv::Point(int(feet.x() + 0.5 * w), y),
+             cv::Scalar(220));
+  }
+  EXPECT_FALSE(onShins(img, cam, r));
+}
+
 TEST(Cns, SameResponseUnderTwoIlluminationLevels) {
   // A horizontal step edge (dark below, bright above) at two contrasts and brightness levels.
   auto edge = [](int dark, int bright) {

@@ -41,11 +41,14 @@ struct RobotDetectorParams {
   /// by max(shin_min_jump_gray, shin_jump_ratio × the carpet)), 0.1 to 0.45 of the height tall at
   /// its lower end, with carpet below it, and lit shin_beside_width_factor robot widths left or
   /// right on at most half its rows (widths of the robot the percept's feet point stands for; a
-  /// line runs on, legs end; so does a nearer robot's body).
+  /// line runs on, legs end; so does a nearer robot's body), and lit on at least
+  /// shin_min_fill_fraction of its rows (a shin is lit throughout; a field line below the robot
+  /// with the carpet's noise pixels lit around it is not).
   double shin_reach_width_fraction = 0.6;
   double shin_min_jump_gray = 16;
   double shin_jump_ratio = 0.18;
   double shin_beside_width_factor = 0.8;
+  double shin_min_fill_fraction = 0.6;
   /// The shins need at least 3 such scan lines spanning this fraction of the robot's width, their
   /// lower ends within max(3 px, this fraction of the height) (interquartile range: feet stand on
   /// flat ground; the ball's lower edge is round).
