@@ -588,12 +588,13 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     const Fit f = again ? Fit::kOverlap : fit(c, true);
     if (f == Fit::kHeldBack && static_cast<int>(out.held_back.size()) < p.max_held_back) {
       out.held_back.push_back({c.proposal, nearer});
-    } else if (f == Fit::kFree || f == Fit::kBehind) {
-      if (knee_kept >= p.max_knee_proposals) break;
+    } else if ((f == Fit::kFree || f == Fit::kBehind) && knee_kept < p.max_knee_proposals) {
       out.proposals.push_back(c.proposal);
       ++knee_kept;
     } else if (keep_rejected) {
-      out.rejected.push_back({c.proposal.feet_px, RobotRejectReason::kOverlap});
+      out.rejected.push_back({c.proposal.feet_px, f == Fit::kFree || f == Fit::kBehind
+                                                      ? RobotRejectReason::kTooMany
+                                                      : RobotRejectReason::kOverlap});
     }
   }
   return out;
