@@ -57,10 +57,8 @@ RobotDetector RobotDetector::loadDefault() {
 namespace {
 // The fraction of a's area inside b.
 double insideFraction(const PixelBox& a, const PixelBox& b) {
-  const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
-  const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
   const double area = a.width() * a.height();
-  return area > 0 ? ix * iy / area : 0;
+  return area > 0 ? boxIntersectionArea(a, b) / area : 0;
 }
 }  // namespace
 
@@ -255,15 +253,15 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     bool excluded = false;
     for (int k : held_back[i - proposals.size()].nearer) {
       excluded |= robot[k] >= params_.min_confidence &&
-                   boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou;
+                  boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou;
     }
     for (std::size_t k = 0; k < seen.size() && !excluded; ++k) {
       const bool other_accepted =
           k < proposals.size() ? robot[k] >= params_.min_confidence
                                : !behind_robot[k - proposals.size()] &&
                                      robot[k] >= params_.min_held_back_confidence;
-      excluded = other_accepted &&
-                  insideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
+      excluded = other_accepted && insideFraction(proposal_boxes[k], proposal_boxes[i]) >=
+                                        params_.max_inside_fraction;
     }
     if (accepted[i] < params_.min_behind_robot_confidence || excluded) accepted[i] = 0;
   }

@@ -16,11 +16,16 @@ struct PixelBox {
   Eigen::Vector2d centre() const { return {(x0 + x1) / 2, (y0 + y1) / 2}; }
 };
 
-/// Intersection over union of two boxes (0 when both are empty).
-inline double boxIou(const PixelBox& a, const PixelBox& b) {
+/// The area two boxes share.
+inline double boxIntersectionArea(const PixelBox& a, const PixelBox& b) {
   const double ix = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
   const double iy = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
-  const double inter = ix * iy;
+  return ix * iy;
+}
+
+/// Intersection over union of two boxes (0 when both are empty).
+inline double boxIou(const PixelBox& a, const PixelBox& b) {
+  const double inter = boxIntersectionArea(a, b);
   const double uni = a.width() * a.height() + b.width() * b.height() - inter;
   return uni > 0 ? inter / uni : 0.0;
 }
