@@ -20,6 +20,10 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
   p.shin_reach_width_fraction = f.getInRange("shin_reach_width_fraction", 0, 5);
   p.shin_min_jump_gray = f.getInRange("shin_min_jump_gray", 1, 255);
+  p.shin_min_height_fraction = f.getInRange("shin_min_height_fraction", 0, 1);
+  p.shin_max_height_fraction = f.getInRange("shin_max_height_fraction", 0, 1);
+  p.shin_max_gap_px = static_cast<int>(f.getInRange("shin_max_gap_px", 0, 64));
+  p.shin_max_gap_height_fraction = f.getInRange("shin_max_gap_height_fraction", 0, 1);
   p.shin_jump_ratio = f.getInRange("shin_jump_ratio", 0, 1);
   p.shin_beside_width_factor = f.getInRange("shin_beside_width_factor", 0.1, 10);
   p.shin_min_fill_fraction = f.getInRange("shin_min_fill_fraction", 0, 1);
@@ -73,7 +77,8 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
   const double width_per_height = field.robot_width_m / field.robot_height_m;
   const double w = *h0 * width_per_height;
   const int knee_rows = static_cast<int>(params.shin_gap_height_fraction * *h0) + 1;
-  const int max_gap = std::max(3, static_cast<int>(0.04 * *h0));  // a run's gap (the proposer's)
+  const int max_gap =
+      std::max(params.shin_max_gap_px, static_cast<int>(params.shin_max_gap_height_fraction * *h0));
   const int y_end = std::min(image.height - 1, feet_y + knee_rows + static_cast<int>(0.5 * *h0));
   const auto at = [&](int x, int y) { return image.data[y * image.stride + x]; };
   // The carpet: the median gray beside the robot at those rows.
@@ -118,7 +123,9 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
     const int bottom = last_lit + 1;
     const auto h = camera.robotHeightPx({x + 0.5, static_cast<double>(bottom)}, field.robot_height_m);
     const int tall = bottom - top;
-    if (!h || tall < 0.1 * *h || tall > 0.45 * *h) continue;
+    if (!h || tall < params.shin_min_height_fraction * *h || tall > params.shin_max_height_fraction * *h) {
+      continue;
+    }
     if (lit_rows < params.shin_min_fill_fraction * tall) continue;
     int lit_beside = 0;
     for (int yy = top; yy < bottom; ++yy) {

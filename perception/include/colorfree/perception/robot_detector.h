@@ -38,7 +38,7 @@ struct RobotDetectorParams {
   double shin_gap_height_fraction = 0.10;
   /// ... on scan lines every 2 px within this fraction of the robot's width left and right of the
   /// feet point. A scan line's stretch counts when lit (brighter than the carpet beside the robot
-  /// by max(shin_min_jump_gray, shin_jump_ratio × the carpet)), 0.1 to 0.45 of the height tall at
+  /// by max(shin_min_jump_gray, shin_jump_ratio × the carpet)), of a shin's height (below) at
   /// its lower end, with carpet below it, and lit shin_beside_width_factor robot widths left or
   /// right on at most half its rows (widths of the robot the percept's feet point stands for; a
   /// line runs on, legs end; so does a nearer robot's body), and lit on at least
@@ -49,6 +49,13 @@ struct RobotDetectorParams {
   double shin_jump_ratio = 0.18;
   double shin_beside_width_factor = 0.8;
   double shin_min_fill_fraction = 0.6;
+  /// A shin is shin_min_height_fraction to shin_max_height_fraction of the robot's height tall;
+  /// unlit rows inside it up to max(shin_max_gap_px, shin_max_gap_height_fraction of the height),
+  /// as inside the proposer's runs (its max_gap_px, max_gap_height_fraction): more end it.
+  double shin_min_height_fraction = 0.1;
+  double shin_max_height_fraction = 0.45;
+  int shin_max_gap_px = 3;
+  double shin_max_gap_height_fraction = 0.04;
   /// The shins need at least 3 such scan lines spanning this fraction of the robot's width, their
   /// lower ends within max(3 px, this fraction of the height) (interquartile range: feet stand on
   /// flat ground; the ball's lower edge is round).
