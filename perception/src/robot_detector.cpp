@@ -245,32 +245,36 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   std::vector<PixelBox> proposal_boxes;
   proposal_boxes.reserve(seen.size());
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
-  // Held-back boxes under their own bar take no part in the choice. Nor does a box behind a robot
-  // with another box RobotNet accepted inside it: its patch holds the nearer robot's body and that
-  // robot, which would become its part. (Boxes behind a robot are there only when every held-back
-  // candidate was classified, in held_back's order.)
-  std::vector<float> accepted = robot;
-  for (std::size_t i = proposals.size(); i < seen.size(); ++i) {
-    if (!behind_robot[i - proposals.size()]) {
-      if (accepted[i] < params_.min_held_back_confidence) accepted[i] = 0;
-      continue;
+  // The boxes RobotNet accepted on their own bars (the others take no part in the choice): the
+  // proposals from min_confidence, held-back candidates behind boxes it rejected from
+  // min_held_back_confidence. (Boxes behind a robot are
+  // there only when every held-back candidate was classified, in held_back's order.)
+  std::vector<bool> on_own_bar(seen.size(), false);
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    if (i < proposals.size()) {
+      on_own_bar[i] = robot[i] >= params_.min_confidence;
+    } else if (!behind_robot[i - proposals.size()]) {
+      on_own_bar[i] = robot[i] >= params_.min_held_back_confidence;
     }
-    // Nor one overlapping an accepted box it stands behind as two robots' boxes overlap: it is that
-    // robot's knee or hand, which RobotNet may score higher than the robot.
+  }
+  std::vector<float> accepted(seen.size(), 0.0f);
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    if (on_own_bar[i]) accepted[i] = robot[i];
+    if (i < proposals.size() || !behind_robot[i - proposals.size()]) continue;
+    // A box behind a robot takes part from min_behind_robot_confidence, but not when it overlaps
+    // an accepted box it stands behind as two robots' boxes overlap (it is that robot's knee or
+    // hand, which RobotNet may score higher than the robot), nor with another accepted box inside
+    // it (its patch holds the nearer robot's body and that robot, which would become its part).
+    if (robot[i] < params_.min_behind_robot_confidence) continue;
     bool excluded = false;
     for (int k : held_back[i - proposals.size()].nearer) {
-      excluded |= robot[k] >= params_.min_confidence &&
-                  boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou;
+      excluded |= on_own_bar[k] && boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou;
     }
     for (std::size_t k = 0; k < seen.size() && !excluded; ++k) {
-      const bool other_accepted =
-          k < proposals.size() ? robot[k] >= params_.min_confidence
-                               : !behind_robot[k - proposals.size()] &&
-                                     robot[k] >= params_.min_held_back_confidence;
-      excluded = other_accepted && insideFraction(proposal_boxes[k], proposal_boxes[i]) >=
-                                        params_.max_inside_fraction;
+      excluded = on_own_bar[k] &&
+                 insideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
     }
-    if (accepted[i] < params_.min_behind_robot_confidence || excluded) accepted[i] = 0;
+    if (!excluded) accepted[i] = robot[i];
   }
   std::vector<RobotPercept> out;
   for (int i : keptRobotBoxes(proposal_boxes, accepted, params_)) {
