@@ -247,8 +247,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
   // The boxes RobotNet accepted on their own bars (the others take no part in the choice): the
   // proposals from min_confidence, held-back candidates behind boxes it rejected from
-  // min_held_back_confidence. (Boxes behind a robot are
-  // there only when every held-back candidate was classified, in held_back's order.)
+  // min_held_back_confidence. (Boxes behind a robot are there only when every held-back
+  // candidate was classified, in held_back's order.)
   std::vector<bool> on_own_bar(seen.size(), false);
   for (std::size_t i = 0; i < seen.size(); ++i) {
     if (i < proposals.size()) {
