@@ -20,13 +20,16 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
   p.shin_reach_width_fraction = f.getInRange("shin_reach_width_fraction", 0, 5);
   p.shin_min_jump_gray = f.getInRange("shin_min_jump_gray", 1, 255);
+  p.shin_jump_ratio = f.getInRange("shin_jump_ratio", 0, 1);
+  p.shin_beside_width_factor = f.getInRange("shin_beside_width_factor", 0.1, 10);
+  p.shin_min_fill_fraction = f.getInRange("shin_min_fill_fraction", 0, 1);
   p.shin_min_height_fraction = f.getInRange("shin_min_height_fraction", 0, 1);
   p.shin_max_height_fraction = f.getInRange("shin_max_height_fraction", 0, 1);
   p.shin_max_gap_px = static_cast<int>(f.getInRange("shin_max_gap_px", 0, 64));
   p.shin_max_gap_height_fraction = f.getInRange("shin_max_gap_height_fraction", 0, 1);
-  p.shin_jump_ratio = f.getInRange("shin_jump_ratio", 0, 1);
-  p.shin_beside_width_factor = f.getInRange("shin_beside_width_factor", 0.1, 10);
-  p.shin_min_fill_fraction = f.getInRange("shin_min_fill_fraction", 0, 1);
+  if (p.shin_min_height_fraction > p.shin_max_height_fraction) {
+    throw Error(path + ": shin_min_height_fraction must not exceed shin_max_height_fraction");
+  }
   p.shin_min_span_width_fraction = f.getInRange("shin_min_span_width_fraction", 0, 5);
   p.shin_max_spread_height_fraction = f.getInRange("shin_max_spread_height_fraction", 0, 1);
   f.finish();

@@ -14,6 +14,7 @@
 #include "colorfree/perception/param_file.h"
 #include "colorfree/perception/pipeline.h"
 #include "colorfree/perception/pose_fit.h"
+#include "colorfree/perception/robot_detector.h"
 
 namespace colorfree {
 namespace {
@@ -112,6 +113,15 @@ TEST(StageParams, ImpossibleCombinationsAreErrors) {
   EXPECT_THROW(FieldLineParams::load(writeTemp("widths.yaml", withValue(lines, "min_width_factor", "5.0"))), Error);
   const std::string body = readFile(defaultParamDir() + "/body_model.yaml");
   EXPECT_THROW(BodyModelParams::load(writeTemp("body.yaml", withValue(body, "chest_top_m", "0.10"))), Error);
+  const std::string detector = readFile(defaultParamDir() + "/robot_detector.yaml");
+  const std::string shins = writeTemp("shins.yaml", withValue(detector, "shin_min_height_fraction", "0.5"));
+  try {
+    RobotDetectorParams::load(shins);
+    ADD_FAILURE() << "a shin's least height over its greatest accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(shins), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("shin_min_height_fraction"), std::string::npos) << e.what();
+  }
 }
 
 TEST(CameraFile, DocumentedExampleLoadsAndSeesTheGroundAhead) {
