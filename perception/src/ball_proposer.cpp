@@ -9,6 +9,7 @@
 #endif
 
 #include "colorfree/perception/error.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/param_file.h"
 
 namespace colorfree {
@@ -37,6 +38,9 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.texture_weight = f.getInRange("texture_weight", 0, 10);
   p.texture_reference_radius_px = f.getInRange("texture_reference_radius_px", 1, 100);
   p.texture_scale_exponent = f.getInRange("texture_scale_exponent", 0, 2);
+  p.texture_noise_factor = f.getInRange("texture_noise_factor", 0, 10);
+  p.noise_free_gray = f.getInRange("noise_free_gray", 0, 255);
+  p.response_noise_factor = f.getInRange("response_noise_factor", 0, 20);
   p.robot_body_factor = f.getInRange("robot_body_factor", 0, 1);
   p.off_axis_exponent = f.getInRange("off_axis_exponent", 0, 2);
   p.centre_search_fraction = f.getInRange("centre_search_fraction", 0, 2);
@@ -178,10 +182,12 @@ std::optional<double> expectedRadius(const CameraModel& camera, const BallPropos
 struct Scale {
   int a, b;            // centre and surround box half-sides, pixels
   float texture_gain;  // texture_weight × (r / reference) ^ exponent
+  float edge_floor;    // the frame's noise's share of the mean edge strength (texture_noise_factor × noise)
 };
 
-Scale scaleAt(double r, const BallProposerParams& p) {
+Scale scaleAt(double r, const BallProposerParams& p, float edge_floor) {
   Scale s;
+  s.edge_floor = edge_floor;
   s.a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
   s.b = std::max(s.a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
   s.texture_gain = static_cast<float>(p.texture_weight *
@@ -241,7 +247,9 @@ float response(const Integrals& ii, int x, int y, const Scale& sc, const BallPro
   if (sc.texture_gain > 0) {
     const std::uint32_t edge_sum = rows[2][cols[2] + 1] - rows[1][cols[2] + 1] - rows[2][cols[1] + 1] + rows[1][cols[1] + 1];
     const int inner_area = (xs[2] - xs[1]) * (ys[2] - ys[1]);
-    const float texture = sc.texture_gain * (static_cast<float>(edge_sum) / static_cast<float>(inner_area));
+    float edges = static_cast<float>(edge_sum) / static_cast<float>(inner_area);
+    if (sc.edge_floor > 0) edges = std::max(0.f, edges - sc.edge_floor);
+    const float texture = sc.texture_gain * edges;
     dog += texture;
     if (on_line) *on_line += texture;
   }
@@ -298,8 +306,9 @@ RowBoxes rowBoxes(const Integrals& ii, int y, const Scale& sc) {
 // every other position). The same operations on the same values as response(), so the same floats.
 constexpr int kBatch = 32;
 
-void responsesInside(const RowBoxes& g, const int* cols, int n, float texture_gain, float boost,
+void responsesInside(const RowBoxes& g, const int* cols, int n, const Scale& sc, float boost,
                      float* resp, float* line) {
+  const float texture_gain = sc.texture_gain, edge_floor = sc.edge_floor;
   std::uint32_t v[16][kBatch];
   std::uint32_t e[4][kBatch];
   for (int k = 0; k < n; ++k) {
@@ -334,9 +343,11 @@ void responsesInside(const RowBoxes& g, const int* cols, int n, float texture_ga
     const float ring = static_cast<float>(outer_sum - sums[4]) / g.ring_area;
     const float surround = std::max(first, ring);
     float dog = mean[4] - surround;
-    // (with texture_gain 0 the term is +0, which changes no response: no branch in the loop)
+    // (with texture_gain 0 the term is +0, which changes no response: no branch in the loop; with
+    // edge_floor 0, max(0, x - 0) is x)
     const std::uint32_t edge_sum = e[3][k] - e[1][k] - e[2][k] + e[0][k];
-    const float texture = texture_gain * (static_cast<float>(edge_sum) / g.inner_area);
+    const float edges = std::max(0.f, static_cast<float>(edge_sum) / g.inner_area - edge_floor);
+    const float texture = texture_gain * edges;
     dog += texture;
     on_line += texture;
     resp[k] = dog * boost;
@@ -635,6 +646,14 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       dim = dimWindows(image, ignore, regions, min_std);
     }
   }
+  // The frame's pixel noise beyond the level the responses were tuned at (in quadrature: independent
+  // noises' variances add): its share of the texture term's edges, and the responses' margin below.
+  double noise = 0;
+  if (p.texture_noise_factor > 0 || p.response_noise_factor > 0) {
+    const double sigma = pixelNoiseGray(image, ignore);
+    noise = std::sqrt(std::max(0.0, sigma * sigma - p.noise_free_gray * p.noise_free_gray));
+  }
+  const float edge_floor = static_cast<float>(p.texture_noise_factor * noise);
   std::vector<ScanRect> rects;
   const int s = regions.window_px;
   for (int r = 0; r < regions.rows; ++r) {
@@ -706,7 +725,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       }
       const double r = *rad;
       const int step = std::max(1, static_cast<int>(p.step_fraction * r));
-      const Scale scale = scaleAt(r, p);
+      const Scale scale = scaleAt(r, p, edge_floor);
       // The first position half a step in; a step wider than the rectangle (a 16-px window and
       // an expected radius of 66 px or more) would leave it out: one evaluation at its middle
       // instead, so the grid of the largest radii is the windows' grid.
@@ -718,7 +737,12 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       const bool inside = p.print_weight <= 0 && x_start - scale.b >= rx0 && rc.x1 - 1 + scale.b <= rx1 &&
                           yy - scale.b >= ry0 && yy + scale.b <= ry1;
       const float boost = static_cast<float>(rc.boost);
+      // The centre box's mean carries the frame's noise over its (2 a)^2 pixels: responses count
+      // net of response_noise_factor such deviations (0 without noise: x - 0 is x).
+      const float margin = static_cast<float>(p.response_noise_factor * noise / (2 * scale.a));
       const auto consider = [&](int x, float resp, float line_resp) {
+        resp -= margin;
+        line_resp -= margin;
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }
@@ -746,7 +770,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
             cols[n] = ii.col(x);
             ++n;
           }
-          responsesInside(boxes, cols, n, scale.texture_gain, boost, resps, lines);
+          responsesInside(boxes, cols, n, scale, boost, resps, lines);
           for (int k = 0; k < n; ++k) consider(xs[k], resps[k], lines[k]);
         }
       } else {

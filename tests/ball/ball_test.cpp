@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 
 #include "colorfree/perception/ball_detector.h"
@@ -296,6 +297,61 @@ TEST(BallProposer, NothingOnBlankDarkCarpet) {
     const GrayImage image = softened(test::renderScene(cam, darkCarpet(seed)));
     const auto props = proposeOnly(image, cam, BallProposerParams::loadDefault());
     EXPECT_TRUE(props.empty()) << "seed " << seed << describe(props);
+  }
+}
+
+// Gaussian sensor noise of deviation sigma_gray added to every pixel (seeded).
+GrayImage withNoise(const GrayImage& in, double sigma_gray, std::uint64_t seed) {
+  GrayImage out = in;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0, sigma_gray);
+  for (int y = 0; y < in.height(); ++y) {
+    for (int x = 0; x < in.width(); ++x) {
+      out.at(x, y) = static_cast<std::uint8_t>(std::clamp(std::lround(in.view().at(x, y) + noise(rng)), 0L, 255L));
+    }
+  }
+  return out;
+}
+
+BallProposerParams withoutNoiseTerms(BallProposerParams p) {
+  p.texture_noise_factor = 0;
+  p.response_noise_factor = 0;
+  return p;
+}
+
+// A dark hall's high gain (noise sigma 25 gray levels, as the camera-noise sweep's): every pixel's
+// edges are some 56 gray levels strong, so without the noise terms the texture term makes the
+// largest, nearest boxes of noisy carpet the strongest responses and the ball gets no proposal;
+// with them it is proposed where it is, and the detector finds it.
+TEST(BallProposer, BallInHeavySensorNoise) {
+  const CameraModel cam = test::testCamera(22);
+  for (const double d : {1.0, 2.0}) {
+    test::SyntheticScene scene = carpetOnly(8);
+    scene.pixel_noise = 0;
+    scene.segments.push_back({{0.5, -0.6}, {4.0, -0.6}});
+    GrayImage image = test::renderScene(cam, scene);
+    const test::DrawnBall b = test::drawBall(image, cam, {d, 0.1});
+    image = withNoise(image, 25, 12);
+    const BallProposerParams shipped = BallProposerParams::loadDefault();
+    const auto props = proposeOnly(image, cam, shipped);
+    EXPECT_GE(matchIndex(props, b), 0) << "ball at " << d << " m (" << b.centre_px.transpose()
+                                       << "), r=" << b.radius_px << describe(props);
+    EXPECT_LT(matchIndex(proposeOnly(image, cam, withoutNoiseTerms(shipped)), b), 0)
+        << "found without the noise terms too at " << d << " m";
+    const Found f = runPipeline(image, cam);
+    EXPECT_TRUE(detected(f.balls, b)) << "ball at " << d << " m" << describe(f.proposals);
+    EXPECT_LE(f.balls.size(), 1u);
+  }
+}
+
+// The same noise on blank carpet: no ball.
+TEST(BallDetection, NothingOnNoisyBlankCarpet) {
+  const CameraModel cam = test::testCamera(22);
+  for (std::uint64_t seed : {13u, 14u}) {
+    test::SyntheticScene scene = carpetOnly(seed);
+    scene.pixel_noise = 0;
+    const Found f = runPipeline(withNoise(test::renderScene(cam, scene), 25, seed), cam);
+    EXPECT_TRUE(f.balls.empty()) << "seed " << seed << describe(f.proposals);
   }
 }
 

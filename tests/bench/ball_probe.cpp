@@ -44,6 +44,9 @@ int probe(int argc, char** argv) {
   env("BP_TEXTURE", config.ball_proposer.texture_weight);
   env("BP_SEARCH", config.ball_proposer.centre_search_fraction);
   env("BP_MINGRAD", config.ball_proposer.min_gradient);
+  env("BP_TNOISE", config.ball_proposer.texture_noise_factor);
+  env("BP_NFREE", config.ball_proposer.noise_free_gray);
+  env("BP_RNOISE", config.ball_proposer.response_noise_factor);
   env("BP_RTOL", config.ball_proposer.radius_tolerance);
   env("BP_MINRESP", config.ball_proposer.min_response);
   env("BP_LRESP", config.ball_proposer.light_response_fraction);

@@ -70,6 +70,17 @@ struct BallProposerParams {
   /// (radius / texture_reference_radius_px) ^ texture_scale_exponent.
   double texture_reference_radius_px = 8.0;
   double texture_scale_exponent = 0.75;
+  /// Sensor noise lights every pixel's edges: the mean edge strength in the centre box counts from
+  /// texture_noise_factor × n on, never below 0, where n = sqrt(max(0, s^2 - noise_free_gray^2)) is
+  /// the frame's pixel noise s (pixelNoiseGray, gray levels) beyond what the texture term was tuned
+  /// with (the carpet's texture and a camera's ordinary noise; independent noises' variances add).
+  /// Pure Gaussian noise of deviation s gives |dx| + |dy| a mean of (4 / sqrt(pi)) s ≈ 2.26 s.
+  double texture_noise_factor = 2.26;
+  double noise_free_gray = 6.0;
+  /// ... and responses (on lines too) count net of response_noise_factor × n / (2 a): that many
+  /// deviations of the centre box's mean under the noise, a = the box's half-side in pixels (small,
+  /// far balls' boxes average few pixels, and noise makes their blobs).
+  double response_noise_factor = 12.0;
   /// Centring of the kept proposals: circle-centre voting by the gradients around the winner at
   /// radii (1 ± radius_tolerance) × the expected radius, within centre_search_fraction × radius;
   /// pixels with a gradient below min_gradient (grey levels per pixel) do not vote.
