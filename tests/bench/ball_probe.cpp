@@ -59,6 +59,7 @@ int probe(int argc, char** argv) {
   env("BP_STEP", config.ball_proposer.step_fraction);
   env("BP_RIDGE", config.ball_proposer.centre_ridge_fraction);
   env("BP_RIDGEMINR", config.ball_proposer.centre_ridge_min_radius_px);
+  if (const char* m = std::getenv("BP_MAXCOUNT")) config.ball_proposer.max_count = std::atoi(m);
   if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
   if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
   env("BP_SMEAR", config.ball_detector.smeared_min_coherence);
