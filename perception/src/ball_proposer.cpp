@@ -247,8 +247,7 @@ float response(const Integrals& ii, int x, int y, const Scale& sc, const BallPro
   if (sc.texture_gain > 0) {
     const std::uint32_t edge_sum = rows[2][cols[2] + 1] - rows[1][cols[2] + 1] - rows[2][cols[1] + 1] + rows[1][cols[1] + 1];
     const int inner_area = (xs[2] - xs[1]) * (ys[2] - ys[1]);
-    float edges = static_cast<float>(edge_sum) / static_cast<float>(inner_area);
-    if (sc.edge_floor > 0) edges = std::max(0.f, edges - sc.edge_floor);
+    const float edges = std::max(0.f, static_cast<float>(edge_sum) / static_cast<float>(inner_area) - sc.edge_floor);
     const float texture = sc.texture_gain * edges;
     dog += texture;
     if (on_line) *on_line += texture;
