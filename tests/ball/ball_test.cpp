@@ -7,7 +7,6 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
-#include <random>
 #include <sstream>
 
 #include "colorfree/perception/ball_detector.h"
@@ -300,19 +299,6 @@ TEST(BallProposer, NothingOnBlankDarkCarpet) {
   }
 }
 
-// Gaussian sensor noise of deviation sigma_gray added to every pixel (seeded).
-GrayImage withNoise(const GrayImage& in, double sigma_gray, std::uint64_t seed) {
-  GrayImage out = in;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> noise(0, sigma_gray);
-  for (int y = 0; y < in.height(); ++y) {
-    for (int x = 0; x < in.width(); ++x) {
-      out.at(x, y) = static_cast<std::uint8_t>(std::clamp(std::lround(in.view().at(x, y) + noise(rng)), 0L, 255L));
-    }
-  }
-  return out;
-}
-
 BallProposerParams withoutNoiseTerms(BallProposerParams p) {
   p.texture_noise_factor = 0;
   p.response_noise_factor = 0;
@@ -331,7 +317,7 @@ TEST(BallProposer, BallInHeavySensorNoise) {
     scene.segments.push_back({{0.5, -0.6}, {4.0, -0.6}});
     GrayImage image = test::renderScene(cam, scene);
     const test::DrawnBall b = test::drawBall(image, cam, {d, 0.1});
-    image = withNoise(image, 25, 12);
+    test::addNoise(image, 25, 12);
     const BallProposerParams shipped = BallProposerParams::loadDefault();
     const auto props = proposeOnly(image, cam, shipped);
     EXPECT_GE(matchIndex(props, b), 0) << "ball at " << d << " m (" << b.centre_px.transpose()
@@ -350,7 +336,9 @@ TEST(BallDetection, NothingOnNoisyBlankCarpet) {
   for (std::uint64_t seed : {13u, 14u}) {
     test::SyntheticScene scene = carpetOnly(seed);
     scene.pixel_noise = 0;
-    const Found f = runPipeline(withNoise(test::renderScene(cam, scene), 25, seed), cam);
+    GrayImage image = test::renderScene(cam, scene);
+    test::addNoise(image, 25, seed);
+    const Found f = runPipeline(image, cam);
     EXPECT_TRUE(f.balls.empty()) << "seed " << seed << describe(f.proposals);
   }
 }

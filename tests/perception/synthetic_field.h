@@ -118,6 +118,17 @@ inline GrayImage renderScene(const CameraModel& camera, const SyntheticScene& sc
   return image;
 }
 
+// Adds Gaussian sensor noise of `sigma` gray levels to every pixel (seeded; clamped, then truncated).
+inline void addNoise(GrayImage& image, double sigma, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0, sigma);
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      image.at(x, y) = static_cast<std::uint8_t>(std::clamp(image.at(x, y) + noise(rng), 0.0, 255.0));
+    }
+  }
+}
+
 // Pure noise on a carpet (no markings).
 inline GrayImage noiseImage(int w, int h, double mean, double sigma, std::uint64_t seed) {
   GrayImage image(w, h);

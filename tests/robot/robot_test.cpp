@@ -14,6 +14,7 @@
 #include "colorfree/perception/robot_orientation.h"
 #include "colorfree/perception/noise.h"
 #include "colorfree/perception/robot_proposer.h"
+#include "synthetic_field.h"
 
 namespace colorfree {
 namespace {
@@ -529,15 +530,6 @@ TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   }
 }
 
-// Adds Gaussian noise of `sigma` gray levels to every pixel (seeded).
-void addNoise(GrayImage& img, double sigma, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> noise(0, sigma);
-  for (int y = 0; y < img.height(); ++y)
-    for (int x = 0; x < img.width(); ++x)
-      img.at(x, y) = static_cast<std::uint8_t>(std::clamp(img.at(x, y) + noise(rng), 0.0, 255.0));
-}
-
 TEST(PixelNoise, MeasuresTheNoiseNotTheObjects) {
   const CameraModel cam = testCamera();
   for (const double sigma : {4.0, 10.0, 20.0}) {
@@ -545,7 +537,7 @@ TEST(PixelNoise, MeasuresTheNoiseNotTheObjects) {
     drawRobot(img, cam, {1.5, 0.2});
     drawRobot(img, cam, {2.5, -0.5});
     cv::rectangle(wrap(img), cv::Point(0, 300), cv::Point(639, 306), cv::Scalar(220), cv::FILLED);
-    addNoise(img, sigma, 15);
+    test::addNoise(img, sigma, 15);
     const double expected = std::hypot(sigma, 3.0);
     const double measured = pixelNoiseGray(img.view(), IgnoreMask::all(640, 480));
     // Within a tenth, and half a bin of the integer differences' histogram (0.5 / 0.6745 / sqrt 2).
@@ -563,7 +555,7 @@ TEST(RobotProposer, NoisyFrameKeepsTheFeet) {
   GrayImage img = carpet(17);
   const Eigen::Vector2d feet = drawRobot(img, cam, {1.8, 0.1});
   const double h = robotSizePx(cam, feet).h;
-  addNoise(img, 15, 18);
+  test::addNoise(img, 15, 18);
   const RobotProposals out = propose(img, cam);
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
   EXPECT_LE(out.proposals.size(), 3u) << describe(out);
