@@ -77,6 +77,8 @@ int probe(int argc, char** argv) {
   env("RD_HELD", config.robot_detector.min_held_back_confidence);
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
   env("RD_SHINFILL", config.robot_detector.shin_min_fill_fraction);
+  env("RD_INSIDE", config.robot_detector.max_inside_fraction);
+  env("RD_IOU", config.robot_detector.max_overlap_iou);
   env("RP_BESIDE", rpp.beside_width_factor);
   env("RP_LINE", rpp.line_stripe_factor);
   env("RP_LINEB", rpp.line_beside_width_factor);
@@ -207,8 +209,27 @@ int probe(int argc, char** argv) {
         if (!m) {
           ++fps;
           frame_miss = true;
-          std::printf("   FALSE POSITIVE feet=(%.0f,%.0f) conf=%.3f\n", p.feet_px.x(), p.feet_px.y(),
-                      p.confidence);
+          // What it covers: the true robot (demanded or not) and the other percept it overlaps most
+          // (intersection over this box's area).
+          const auto inside = [&](const PixelBox& a, const PixelBox& b) {
+            const double w = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
+            const double h = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
+            return a.width() * a.height() > 0 ? w * h / (a.width() * a.height()) : 0.0;
+          };
+          int on_robot = -1, on_percept = -1;
+          double best_r = 0, best_p = 0;
+          for (const RobotInImage& r : truth.robots) {
+            if (r.in_view && inside(p.box, r.box) > best_r) best_r = inside(p.box, r.box), on_robot = r.index;
+          }
+          for (std::size_t j = 0; j < percepts.size(); ++j) {
+            if (&percepts[j] != &p && inside(p.box, percepts[j].box) > best_p) {
+              best_p = inside(p.box, percepts[j].box), on_percept = static_cast<int>(j);
+            }
+          }
+          std::printf("   FALSE POSITIVE feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) conf=%.3f on R%d %.2f, "
+                      "percept %d %.2f\n",
+                      p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1, p.confidence,
+                      on_robot, best_r, on_percept, best_p);
         }
       }
       if (!png_dir.empty() && (!misses_only || frame_miss)) {
