@@ -179,11 +179,32 @@ std::optional<double> CameraModel::ballRadiusPx(const Eigen::Vector2d& pixel,
 
 std::optional<double> CameraModel::robotHeightPx(const Eigen::Vector2d& feet_pixel,
                                                  double robot_height_m) const {
-  const auto feet = pixelToGround(feet_pixel);
-  if (!feet) return std::nullopt;
-  const auto top = robotToPixel(Eigen::Vector3d(feet->x(), feet->y(), robot_height_m));
-  if (!top) return std::nullopt;
-  return (feet_pixel - *top).norm();
+  // Closed form, one division (the proposer asks this for every lit pixel its scan lines meet).
+  // With the optical ray d = (a / f_x, b / f_y, 1), a and b the pixel's offsets from the
+  // principal point, and g = R^T z (the robot frame's up in the optical frame), the ray meets
+  // the ground, `below` the camera, at t d with t = below / (g . d), and the head above it
+  // projects through c = t d + h g. Its offset from the feet pixel is
+  //   (h (g . d) / (below + h g_z (g . d))) (f_x g_x - a g_z, f_y g_y - b g_z);
+  // multiplied through by f_x f_y: D = f_x f_y (g . d), N = below f_x f_y + h g_z D. The same
+  // tests as pixelToGround (the unit ray heads down, by more than kMinDirectionZ) and
+  // robotToPixel (the head in front of the camera: c_z = N / D > 1e-9).
+  const auto& k = intrinsics_;
+  const Eigen::Matrix3d& r = camera_to_robot_.linear();
+  const double gx = r(2, 0), gy = r(2, 1), gz = r(2, 2);
+  const double a = feet_pixel.x() - k.center_x_px, b = feet_pixel.y() - k.center_y_px;
+  const double fxy = k.focal_x_px * k.focal_y_px;
+  const double d = gx * a * k.focal_y_px + gy * b * k.focal_x_px + gz * fxy;
+  const double below = -camera_to_robot_.translation().z();
+  const double down = d * below;  // (g . d) below f_x f_y: > 0 when the ray heads down
+  const double ray_sq = a * a * k.focal_y_px * k.focal_y_px + b * b * k.focal_x_px * k.focal_x_px +
+                        fxy * fxy;  // |d|^2 (f_x f_y)^2
+  if (down <= 0 || down * down <= kMinDirectionZ * kMinDirectionZ * below * below * ray_sq) {
+    return std::nullopt;
+  }
+  const double n = below * fxy + robot_height_m * gz * d;
+  if (d > 0 ? n <= 1e-9 * d : n >= 1e-9 * d) return std::nullopt;
+  const double p = k.focal_x_px * gx - a * gz, q = k.focal_y_px * gy - b * gz;
+  return std::abs(robot_height_m * d / n) * std::sqrt(p * p + q * q);
 }
 
 }  // namespace colorfree
