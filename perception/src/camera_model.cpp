@@ -167,43 +167,71 @@ std::optional<double> CameraModel::horizonY(double x) const {
   return k.center_y_px - (r(2, 2) + a * (x - k.center_x_px)) / b;
 }
 
+namespace {
+
+// The ray through a pixel towards a horizontal plane `below` the camera (negative: the plane is
+// under it), for the closed forms below, multiplied through by f_x f_y to spare divisions. With
+// a and b the pixel's offsets from the principal point, the optical ray d = (a / f_x, b / f_y, 1)
+// and g = R^T z (the robot frame's up in the optical frame): towards = f_x f_y (g . d) and
+// length_sq = f_x^2 f_y^2 |d|^2. Empty when the unit ray does not head to the plane by more than
+// kMinDirectionZ (pixelToGround's test).
+struct PlaneRay {
+  double a, b, towards, length_sq;
+};
+
+std::optional<PlaneRay> planeRay(const CameraIntrinsics& k, const Eigen::Isometry3d& camera_to_robot,
+                                 const Eigen::Vector2d& pixel, double below) {
+  const Eigen::Matrix3d& r = camera_to_robot.linear();
+  PlaneRay ray;
+  ray.a = pixel.x() - k.center_x_px;
+  ray.b = pixel.y() - k.center_y_px;
+  const double fxy = k.focal_x_px * k.focal_y_px;
+  ray.towards = r(2, 0) * ray.a * k.focal_y_px + r(2, 1) * ray.b * k.focal_x_px + r(2, 2) * fxy;
+  ray.length_sq = ray.a * ray.a * k.focal_y_px * k.focal_y_px +
+                  ray.b * ray.b * k.focal_x_px * k.focal_x_px + fxy * fxy;
+  const double down = ray.towards * below;
+  if (down <= 0 || down * down <= kMinDirectionZ * kMinDirectionZ * below * below * ray.length_sq) {
+    return std::nullopt;
+  }
+  return ray;
+}
+
+}  // namespace
+
 std::optional<double> CameraModel::ballRadiusPx(const Eigen::Vector2d& pixel,
                                                 double ball_radius_m) const {
-  const auto centre = pixelToGround(pixel, ball_radius_m);
-  if (!centre) return std::nullopt;
-  const Eigen::Vector3d c(centre->x(), centre->y(), ball_radius_m);
-  const double dist = (c - position()).norm();
-  if (dist <= ball_radius_m) return std::nullopt;
-  return intrinsics_.focal_y_px * std::tan(std::asin(ball_radius_m / dist));
+  // Closed form (the ball proposer asks this per scan row and window): the centre's plane lies at
+  // dist = below |d| / (g . d) along the unit ray (planeRay's terms), and a sphere of radius R seen
+  // from dist subtends f_y tan(asin(R / dist)) = f_y R / sqrt(dist^2 - R^2). Empty, besides
+  // planeRay's test, when the sphere is not in front of the camera (dist <= R).
+  const double below = ball_radius_m - camera_to_robot_.translation().z();
+  const auto ray = planeRay(intrinsics_, camera_to_robot_, pixel, below);
+  if (!ray) return std::nullopt;
+  const double d = ray->towards;
+  const double rest = below * below * ray->length_sq - ball_radius_m * ball_radius_m * d * d;  // (dist^2 - R^2) D^2
+  if (rest <= 0) return std::nullopt;
+  return intrinsics_.focal_y_px * ball_radius_m * std::abs(d) / std::sqrt(rest);
 }
 
 std::optional<double> CameraModel::robotHeightPx(const Eigen::Vector2d& feet_pixel,
                                                  double robot_height_m) const {
-  // Closed form, one division (the proposer asks this for every lit pixel its scan lines meet).
-  // With the optical ray d = (a / f_x, b / f_y, 1), a and b the pixel's offsets from the
-  // principal point, and g = R^T z (the robot frame's up in the optical frame), the ray meets
-  // the ground, `below` the camera, at t d with t = below / (g . d), and the head above it
-  // projects through c = t d + h g. Its offset from the feet pixel is
+  // Closed form, one division (the proposer asks this for every lit pixel its scan lines meet):
+  // the ray meets the ground at t d with t = below / (g . d), and the head above it projects
+  // through c = t d + h g. Its offset from the feet pixel is
   //   (h (g . d) / (below + h g_z (g . d))) (f_x g_x - a g_z, f_y g_y - b g_z);
-  // multiplied through by f_x f_y: D = f_x f_y (g . d), N = below f_x f_y + h g_z D. The same
-  // tests as pixelToGround (the unit ray heads down, by more than kMinDirectionZ) and
-  // robotToPixel (the head in front of the camera: c_z = N / D > 1e-9).
+  // with D = f_x f_y (g . d) (planeRay's terms), N = below f_x f_y + h g_z D. Empty, besides
+  // planeRay's test, when the head is not in front of the camera (c_z = N / D <= 1e-9, as
+  // robotToPixel).
   const auto& k = intrinsics_;
+  const double below = -camera_to_robot_.translation().z();
+  const auto ray = planeRay(k, camera_to_robot_, feet_pixel, below);
+  if (!ray) return std::nullopt;
   const Eigen::Matrix3d& r = camera_to_robot_.linear();
   const double gx = r(2, 0), gy = r(2, 1), gz = r(2, 2);
-  const double a = feet_pixel.x() - k.center_x_px, b = feet_pixel.y() - k.center_y_px;
-  const double fxy = k.focal_x_px * k.focal_y_px;
-  const double d = gx * a * k.focal_y_px + gy * b * k.focal_x_px + gz * fxy;
-  const double below = -camera_to_robot_.translation().z();
-  const double down = d * below;  // (g . d) below f_x f_y: > 0 when the ray heads down
-  const double ray_sq = a * a * k.focal_y_px * k.focal_y_px + b * b * k.focal_x_px * k.focal_x_px +
-                        fxy * fxy;  // |d|^2 (f_x f_y)^2
-  if (down <= 0 || down * down <= kMinDirectionZ * kMinDirectionZ * below * below * ray_sq) {
-    return std::nullopt;
-  }
-  const double n = below * fxy + robot_height_m * gz * d;
+  const double d = ray->towards;
+  const double n = below * k.focal_x_px * k.focal_y_px + robot_height_m * gz * d;
   if (d > 0 ? n <= 1e-9 * d : n >= 1e-9 * d) return std::nullopt;
-  const double p = k.focal_x_px * gx - a * gz, q = k.focal_y_px * gy - b * gz;
+  const double p = k.focal_x_px * gx - ray->a * gz, q = k.focal_y_px * gy - ray->b * gz;
   return std::abs(robot_height_m * d / n) * std::sqrt(p * p + q * q);
 }
 

@@ -110,11 +110,12 @@ TEST(CameraModel, RobotHeightShrinksWithDistance) {
   EXPECT_LT(near_h, 3.5 * far_h);
 }
 
-// robotHeightPx is a closed form of its definition: the feet pixel to the ground, the point
-// robot_height_m above it back to a pixel, the distance between the two pixels. Over the whole
-// image (the horizon and above it included) under pitched, turned and rolled cameras, with
-// unequal focal lengths, both agree, and so do their empty answers.
-TEST(CameraModel, RobotHeightIsTheProjectedHeadAboveTheFeet) {
+// robotHeightPx and ballRadiusPx are closed forms of their definitions: the feet pixel to the
+// ground, the point robot_height_m above it back to a pixel, the distance between the two
+// pixels; the ball's centre on its plane and the angle its sphere subtends from the camera. Over
+// the whole image (the horizon and above it included) under pitched, turned and rolled cameras,
+// with unequal focal lengths, both agree, and so do their empty answers.
+TEST(CameraModel, RobotHeightAndBallRadiusFollowTheirDefinitions) {
   CameraIntrinsics stretched = CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * kPi / 180);
   stretched.focal_y_px *= 1.1;
   stretched.center_x_px = 310;
@@ -125,29 +126,41 @@ TEST(CameraModel, RobotHeightIsTheProjectedHeadAboveTheFeet) {
   tilted.yaw_rad = 40 * kPi / 180;
   const CameraModel cams[] = {naoTopCamera(20), naoTopCamera(-5, 30, 8), naoTopCamera(60, -45, -20),
                               CameraModel(stretched, tilted)};
-  int heights = 0, empty = 0;
+  int heights = 0, radii = 0, empty = 0;
+  const auto expectSame = [&](const std::optional<double>& got, const std::optional<double>& expected,
+                              double u, double v, int& count) {
+    ASSERT_EQ(got.has_value(), expected.has_value()) << "at (" << u << ", " << v << ")";
+    if (!expected) {
+      ++empty;
+      return;
+    }
+    ++count;
+    ASSERT_NEAR(*got, *expected, 1e-9 * std::max(1.0, *expected)) << "at (" << u << ", " << v << ")";
+  };
   for (const CameraModel& cam : cams) {
     for (double v = 0.5; v < 480; v += 7) {
       for (double u = 0.5; u < 640; u += 9) {
+        const Eigen::Vector2d px(u, v);
         for (const double h : {0.574, 0.2}) {
-          const Eigen::Vector2d feet_px(u, v);
           std::optional<double> expected;
-          if (const auto g = cam.pixelToGround(feet_px)) {
-            if (const auto top = cam.robotToPixel({g->x(), g->y(), h})) expected = (feet_px - *top).norm();
+          if (const auto g = cam.pixelToGround(px)) {
+            if (const auto top = cam.robotToPixel({g->x(), g->y(), h})) expected = (px - *top).norm();
           }
-          const auto got = cam.robotHeightPx(feet_px, h);
-          ASSERT_EQ(got.has_value(), expected.has_value()) << "at (" << u << ", " << v << ")";
-          if (!expected) {
-            ++empty;
-            continue;
+          expectSame(cam.robotHeightPx(px, h), expected, u, v, heights);
+        }
+        for (const double r : {0.05, 0.3}) {
+          std::optional<double> expected;
+          if (const auto c = cam.pixelToGround(px, r)) {
+            const double dist = (Eigen::Vector3d(c->x(), c->y(), r) - cam.position()).norm();
+            if (dist > r) expected = cam.intrinsics().focal_y_px * std::tan(std::asin(r / dist));
           }
-          ++heights;
-          ASSERT_NEAR(*got, *expected, 1e-9 * std::max(1.0, *expected)) << "at (" << u << ", " << v << ")";
+          expectSame(cam.ballRadiusPx(px, r), expected, u, v, radii);
         }
       }
     }
   }
   EXPECT_GT(heights, 1000);
+  EXPECT_GT(radii, 1000);
   EXPECT_GT(empty, 1000) << "the poses must show the sky too";
 }
 
