@@ -207,32 +207,33 @@ std::optional<double> CameraModel::ballRadiusPx(const Eigen::Vector2d& pixel,
   const double below = ball_radius_m - camera_to_robot_.translation().z();
   const auto ray = planeRay(intrinsics_, camera_to_robot_, pixel, below);
   if (!ray) return std::nullopt;
-  const double d = ray->towards;
-  const double rest = below * below * ray->length_sq - ball_radius_m * ball_radius_m * d * d;  // (dist^2 - R^2) D^2
+  const double towards = ray->towards;
+  // (dist^2 - R^2) towards^2
+  const double rest = below * below * ray->length_sq - ball_radius_m * ball_radius_m * towards * towards;
   if (rest <= 0) return std::nullopt;
-  return intrinsics_.focal_y_px * ball_radius_m * std::abs(d) / std::sqrt(rest);
+  return intrinsics_.focal_y_px * ball_radius_m * std::abs(towards) / std::sqrt(rest);
 }
 
 std::optional<double> CameraModel::robotHeightPx(const Eigen::Vector2d& feet_pixel,
                                                  double robot_height_m) const {
   // Closed form, one division (the proposer asks this for every lit pixel its scan lines meet):
   // the ray meets the ground at t d with t = below / (g . d), and the head above it projects
-  // through c = t d + h g. Its offset from the feet pixel is
-  //   (h (g . d) / (below + h g_z (g . d))) (f_x g_x - a g_z, f_y g_y - b g_z);
-  // with D = f_x f_y (g . d) (planeRay's terms), N = below f_x f_y + h g_z D. Empty, besides
-  // planeRay's test, when the head is not in front of the camera (c_z = N / D <= 1e-9, as
-  // robotToPixel).
+  // through c = t d + h g, whose offset from the feet pixel is
+  //   (h (g . d) / (below + h g_z (g . d))) (f_x g_x - a g_z, f_y g_y - b g_z),
+  // that is h towards / n times the vector, with n = below f_x f_y + h g_z towards (planeRay's
+  // terms). Empty, besides planeRay's test, when the head is not in front of the camera
+  // (c_z = n / towards <= 1e-9, as robotToPixel).
   const auto& k = intrinsics_;
   const double below = -camera_to_robot_.translation().z();
   const auto ray = planeRay(k, camera_to_robot_, feet_pixel, below);
   if (!ray) return std::nullopt;
   const Eigen::Matrix3d& r = camera_to_robot_.linear();
   const double gx = r(2, 0), gy = r(2, 1), gz = r(2, 2);
-  const double d = ray->towards;
-  const double n = below * k.focal_x_px * k.focal_y_px + robot_height_m * gz * d;
-  if (d > 0 ? n <= 1e-9 * d : n >= 1e-9 * d) return std::nullopt;
+  const double towards = ray->towards;
+  const double n = below * k.focal_x_px * k.focal_y_px + robot_height_m * gz * towards;
+  if (towards > 0 ? n <= 1e-9 * towards : n >= 1e-9 * towards) return std::nullopt;
   const double p = k.focal_x_px * gx - ray->a * gz, q = k.focal_y_px * gy - ray->b * gz;
-  return std::abs(robot_height_m * d / n) * std::sqrt(p * p + q * q);
+  return std::abs(robot_height_m * towards / n) * std::sqrt(p * p + q * q);
 }
 
 }  // namespace colorfree
