@@ -161,7 +161,7 @@ void addRunCommand(CLI::App& app, int& exit_code) {
               const std::string file = frame_dir + "/" + frameFile(f.frame_index);
               writeGrayPng(file, f.image.view());
               // The camera file beside it, for `colorfree detect FRAME --camera FRAME.camera.yaml`.
-              f.truth.camera.model.save(file.substr(0, file.size() - 4) + ".camera.yaml");
+              f.perception_camera.save(file.substr(0, file.size() - 4) + ".camera.yaml");
             }
             bar.update(++done, total, info.name);
           });

@@ -91,7 +91,7 @@ PerceptionRunner::PerceptionRunner()
       pose_fitter_(PoseFitParams::loadDefault(), FieldDimensions::loadDefault()) {}
 
 FramePercepts PerceptionRunner::process(const sim::RenderedFrame& rendered, const ScoringParams& scoring) {
-  Frame frame(rendered.image.view(), rendered.truth.camera.model);
+  Frame frame(rendered.image.view(), rendered.perception_camera);
   frame.time_s = rendered.truth.time_s;
   PipelineStats this_frame;
   pipeline_.process(frame, &this_frame, &tracks_);

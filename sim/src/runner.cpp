@@ -198,9 +198,23 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
   }
   frame.truth.camera.model = renderer.cameraModel(settings.camera, w, h);
   frame.truth.camera.camera_to_field = renderer.cameraToField(settings.camera);
+  frame.perception_camera = perceivedCamera(frame.truth.camera.model, settings.camera_error);
   exposure = applyOptics(std::move(exposure), settings.effects);
   frame.image = applySensor(exposure, settings.effects, frameSeed(settings.seed, frame_index));
   return frame;
+}
+
+CameraModel perceivedCamera(const CameraModel& truth, const CameraErrorSpec& error) {
+  if (!error.any()) return truth;
+  const Eigen::Matrix3d body = truth.cameraToRobot().linear() * opticalToBody().transpose();
+  Eigen::Isometry3d pose = truth.cameraToRobot();
+  pose.linear() = Eigen::AngleAxisd(error.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * body *
+                  (Eigen::AngleAxisd(error.pitch_rad, Eigen::Vector3d::UnitY()) *
+                   Eigen::AngleAxisd(error.roll_rad, Eigen::Vector3d::UnitX()))
+                      .toRotationMatrix() *
+                  opticalToBody();
+  pose.translation().z() += error.height_m;
+  return CameraModel(truth.intrinsics(), pose);
 }
 
 void ScenarioRunner::runCase(int case_index, int frames, bool object_map,

@@ -360,6 +360,16 @@ CaseSettings parseCase(const YAML::Node& root, const std::string& origin,
     }
   }
 
+  if (const YAML::Node error = r.optional("camera_error")) {
+    MapReader c(error, "camera_error", origin);
+    CameraErrorSpec& x = s.camera_error;
+    x.pitch_rad = c.number("pitch_deg", -20, 20, 0) * kDegToRad;
+    x.roll_rad = c.number("roll_deg", -20, 20, 0) * kDegToRad;
+    x.yaw_rad = c.number("yaw_deg", -20, 20, 0) * kDegToRad;
+    x.height_m = c.number("height_m", -0.2, 0.2, 0);
+    c.finish();
+  }
+
   if (const YAML::Node scoring = r.optional("scoring")) {
     MapReader sc(scoring, "scoring", origin);
     s.orientation_tolerance_rad =

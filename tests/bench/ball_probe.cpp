@@ -74,7 +74,7 @@ int probe(int argc, char** argv) {
     RobotTracks tracks;
     runner.runCase(c, frames, true, [&](const sim::RenderedFrame& f) {
       const FrameTruth truth = computeFrameTruth(f.truth, markings, dims, scoring);
-      Frame frame(f.image.view(), f.truth.camera.model);
+      Frame frame(f.image.view(), f.perception_camera);
       pipeline.process(frame, nullptr, &tracks);
       const BallInImage& b = truth.ball;
       const bool demand = truth.ball_present && b.in_view && b.should_detect;
@@ -129,7 +129,7 @@ int probe(int argc, char** argv) {
         char name[256];
         std::snprintf(name, sizeof name, "%s/c%02d_f%03d.png", png_dir.c_str(), c, f.frame_index);
         writeGrayPng(name, f.image.view());
-        f.truth.camera.model.save(std::string(name) + ".camera.yaml");  // for colorfree detect
+        f.perception_camera.save(std::string(name) + ".camera.yaml");  // for colorfree detect
       }
     });
   }

@@ -39,7 +39,7 @@ BenchFrame prepare(const std::string& name, sim::RenderedFrame f) {
   BenchFrame b;
   b.name = name;
   b.image = std::move(f.image);
-  b.camera = f.truth.camera.model;
+  b.camera = f.perception_camera;
   Frame frame(b.image.view(), b.camera);
   early.process(frame);
   b.ignore = *frame.ignore_mask;

@@ -62,7 +62,7 @@ void addFrames(const std::string& scenario, const std::vector<int>& cases, const
       sim::RenderedFrame r = runner.render(c, f, false);
       BenchFrame b;
       b.name = runner.scenario().name + "_" + runner.scenarioCase(c).name() + "_f" + std::to_string(f);
-      b.camera = r.truth.camera.model;
+      b.camera = r.perception_camera;
       b.image = std::move(r.image);
       b.ignore = IgnoreMask::combine(boundary().run(b.image.view(), b.camera), body().run(b.camera),
                                      b.image.width(), b.image.height());

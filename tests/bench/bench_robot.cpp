@@ -28,7 +28,7 @@ struct Fixture {
     sim::ScenarioRunner runner(sim::Scenario::load(std::string(COLORFREE_SOURCE_DIR) + "/scenes/ci/robot_bench.yaml"),
                                sim::worldRendererFactory());
     rendered = runner.render(0, 0, false);
-    frame = std::make_unique<Frame>(rendered.image.view(), rendered.truth.camera.model);
+    frame = std::make_unique<Frame>(rendered.image.view(), rendered.perception_camera);
     Pipeline(PipelineConfig::loadDefault()).process(*frame);
     proposals = proposer.run(frame->image, frame->camera, *frame->ignore_mask, *frame->contrast_regions);
     std::vector<RobotProposal> classified;

@@ -102,10 +102,11 @@ int probe(int argc, char** argv) {
     RobotTracks tracks;
     runner.runCase(c, frames, true, [&](const sim::RenderedFrame& f) {
       const FrameTruth truth = computeFrameTruth(f.truth, markings, dims, scoring);
-      Frame frame(f.image.view(), f.truth.camera.model);
+      Frame frame(f.image.view(), f.perception_camera);
       pipeline.process(frame, nullptr, &tracks);
+      // The perception's camera for the proposer; the true one for matching, as the scorer does.
       const CameraModel& cam = f.truth.camera.model;
-      const RobotProposals rp = proposer.run(frame.image, cam, *frame.ignore_mask,
+      const RobotProposals rp = proposer.run(frame.image, f.perception_camera, *frame.ignore_mask,
                                              *frame.contrast_regions, true);
       ++frames_seen;
       const auto& props = *frame.robot_proposals;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -123,6 +124,65 @@ TEST(RunnerTest, FrameTruthFollowsTheScenario) {
   EXPECT_EQ(f.truth.object_map.at(150, 5), kObjectBall);
   EXPECT_EQ(log.renders, 1);
   EXPECT_EQ(runner.render(0, 2, false).truth.object_map.labels.size(), 0u);
+}
+
+// The largest difference between two poses' matrix entries.
+double poseDifference(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  double d = 0;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) d = std::max(d, std::abs(a.matrix()(i, j) - b.matrix()(i, j)));
+  }
+  return d;
+}
+
+// The believed camera of a camera posed by yaw and pitch alone is that pose with the errors added.
+TEST(RunnerTest, PerceivedCameraAddsTheErrorToTheCamerasPose) {
+  const CameraIntrinsics in = CameraIntrinsics::fromHorizontalFov(640, 480, 1.06);
+  CameraPose pose;
+  pose.x_m = 0.05;
+  pose.y_m = -0.01;
+  pose.height_m = 0.51;
+  pose.pitch_rad = 0.3;
+  pose.yaw_rad = -0.6;
+  const CameraModel truth(in, pose);
+  CameraErrorSpec error;
+  EXPECT_EQ(poseDifference(perceivedCamera(truth, error).cameraToRobot(), truth.cameraToRobot()), 0);
+  error.pitch_rad = 0.035;
+  error.roll_rad = -0.02;
+  error.yaw_rad = 0.01;
+  error.height_m = 0.015;
+  CameraPose believed = pose;
+  believed.pitch_rad += error.pitch_rad;
+  believed.roll_rad += error.roll_rad;
+  believed.yaw_rad += error.yaw_rad;
+  believed.height_m += error.height_m;
+  const CameraModel got = perceivedCamera(truth, error);
+  EXPECT_LT(poseDifference(got.cameraToRobot(), CameraModel(in, believed).cameraToRobot()), 1e-12)
+      << got.cameraToRobot().matrix() << "\n" << CameraModel(in, believed).cameraToRobot().matrix();
+  EXPECT_EQ(got.intrinsics().focal_x_px, in.focal_x_px);
+  // A camera believed to look further down sees the horizon higher in the image (its believed
+  // horizon row is above the true one's).
+  CameraErrorSpec down;
+  down.pitch_rad = 0.035;
+  EXPECT_LT(*perceivedCamera(truth, down).horizonY(320), *truth.horizonY(320) - 15);
+}
+
+TEST(RunnerTest, PerceptionCameraCarriesTheScenariosCameraError) {
+  FakeLog log;
+  ScenarioRunner plain(Scenario::parse(scenario(""), "fake.yaml"), fakeFactory(log));
+  const RenderedFrame a = plain.render(0, 1);
+  EXPECT_EQ(poseDifference(a.perception_camera.cameraToRobot(), a.truth.camera.model.cameraToRobot()), 0);
+  ScenarioRunner off(Scenario::parse(scenario("camera_error: {pitch_deg: 2, height_m: 0.02}\n"), "fake.yaml"),
+                     fakeFactory(log));
+  const RenderedFrame b = off.render(0, 1);
+  // The image and the truth are those of the true camera; only the perception's model moves.
+  EXPECT_EQ(b.image.pixels(), a.image.pixels());
+  EXPECT_EQ(poseDifference(b.truth.camera.model.cameraToRobot(), a.truth.camera.model.cameraToRobot()), 0);
+  EXPECT_NEAR(b.perception_camera.position().z(), a.truth.camera.model.position().z() + 0.02, 1e-12);
+  EXPECT_EQ(poseDifference(b.perception_camera.cameraToRobot(),
+                           perceivedCamera(b.truth.camera.model, off.scenarioCase(0).settings.camera_error)
+                               .cameraToRobot()),
+            0);
 }
 
 TEST(RunnerTest, MotionBlurAveragesSubframesAcrossTheExposure) {

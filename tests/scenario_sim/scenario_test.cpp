@@ -223,6 +223,31 @@ TEST(ScenarioTest, ValueOutOfRangeNamesFileLineAndKey) {
   EXPECT_NE(head.find("observer.head.pitch_deg"), std::string::npos) << head;
 }
 
+TEST(ScenarioTest, CameraErrorIsReadInDegreesAndMetresAndChecked) {
+  EXPECT_FALSE(Scenario::parse(kMinimal, "x.yaml").cases[0].settings.camera_error.any());
+  const Scenario s = Scenario::parse(
+      std::string(kMinimal) + "camera_error: {pitch_deg: 2, roll_deg: -1, yaw_deg: 0.5, height_m: -0.01}\n",
+      "x.yaml");
+  const CameraErrorSpec& e = s.cases[0].settings.camera_error;
+  EXPECT_TRUE(e.any());
+  EXPECT_DOUBLE_EQ(e.pitch_rad, 2 * kDeg);
+  EXPECT_DOUBLE_EQ(e.roll_rad, -1 * kDeg);
+  EXPECT_DOUBLE_EQ(e.yaw_rad, 0.5 * kDeg);
+  EXPECT_DOUBLE_EQ(e.height_m, -0.01);
+  const std::string range = errorOf(std::string(kMinimal) + "camera_error: {pitch_deg: 25}\n");
+  EXPECT_NE(range.find("bad.yaml:12: camera_error.pitch_deg: value 25 is out of range"), std::string::npos)
+      << range;
+  const std::string key = errorOf(std::string(kMinimal) + "camera_error: {tilt_deg: 1}\n");
+  EXPECT_NE(key.find("camera_error.tilt_deg: unknown key"), std::string::npos) << key;
+  // Sweepable like any key, the section created when the file leaves it out.
+  const Scenario swept = Scenario::parse(
+      std::string(kMinimal) + "sweep:\n  - path: camera_error.pitch_deg\n    values: [-2, 0, 3]\n", "x.yaml");
+  ASSERT_EQ(swept.cases.size(), 3u);
+  EXPECT_DOUBLE_EQ(swept.cases[0].settings.camera_error.pitch_rad, -2 * kDeg);
+  EXPECT_FALSE(swept.cases[1].settings.camera_error.any());
+  EXPECT_DOUBLE_EQ(swept.cases[2].settings.camera_error.pitch_rad, 3 * kDeg);
+}
+
 TEST(ScenarioTest, MalformedYamlNamesFileAndLine) {
   const std::string msg = errorOf(std::string(kMinimal) + "robots: [\n  {x_m: 1\n");
   EXPECT_NE(msg.find("bad.yaml:"), std::string::npos) << msg;

@@ -84,7 +84,7 @@ std::vector<std::vector<FrameCandidates>> renderSources(const ObjectKind& kind,
           FrameCandidates fc;
           fc.scenario = case_name;
           fc.frame = index;
-          fc.candidates = kind.proposals(f.image, f.truth.camera.model, truth);
+          fc.candidates = kind.proposals(f.image, f.perception_camera, truth);
           if (what(round) == Collect::kTruthAndProposals) {
             auto t = kind.truthSamples(f.image, f.truth.camera.model, truth);
             fc.candidates.insert(fc.candidates.begin(), t.begin(), t.end());

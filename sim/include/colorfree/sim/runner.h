@@ -46,12 +46,22 @@ double lightingScaleAt(const CaseSettings& settings, int frame_index, double t_s
 /// The ball's orientation at time 0 (seeded, so that the print differs between scenarios).
 Eigen::Quaterniond initialBallOrientation(std::uint64_t seed);
 
+/// The camera model a robot with `error` in its camera pose believes in: the true camera's viewing
+/// direction turned by the error in its own frame (x along the view, y left, z up):
+/// Rz(yaw) · B · Ry(pitch) · Rx(roll), B the true camera's body frame and Rz about the robot's
+/// vertical; the optical centre raised by height_m. For a camera with no roll of its own this is the
+/// camera file's pose with the errors added to its yaw, pitch, roll and height.
+CameraModel perceivedCamera(const CameraModel& truth, const CameraErrorSpec& error);
+
 /// One frame of one case: the image with its camera effects, and the truth at the frame time.
 struct RenderedFrame {
   int case_index = 0;
   int frame_index = 0;
   GrayImage image;
   WorldState truth;  ///< object_map filled when it was asked for
+  /// The camera model the perception is given: truth.camera.model with the case's camera_error
+  /// (the same model when there is none). Scoring projects the truth with truth.camera.model.
+  CameraModel perception_camera;
 };
 
 /// Renders the cases of a scenario frame by frame. Deterministic: the same scenario gives the same

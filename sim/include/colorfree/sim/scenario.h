@@ -75,6 +75,17 @@ struct EffectsSpec {
   double veiling_glare = 0;       ///< share of the light the lens scatters evenly over the frame
 };
 
+/// An error in the camera pose the perception is given (what the robot believes its camera's pose
+/// is, from joint encoders, the torso's IMU and its calibration), against the pose the frame is
+/// rendered and scored with. Zero: the perception gets the true camera.
+struct CameraErrorSpec {
+  double pitch_rad = 0;  ///< the believed camera looks this much further down (about its own left axis)
+  double roll_rad = 0;   ///< ... is turned this much about its viewing axis (clockwise as seen by it)
+  double yaw_rad = 0;    ///< ... looks this much further left (about the robot's vertical)
+  double height_m = 0;   ///< ... sits this much higher
+  bool any() const { return pitch_rad != 0 || roll_rad != 0 || yaw_rad != 0 || height_m != 0; }
+};
+
 /// One expectation, e.g. "ball.detection_rate >= 0.97". The metric names are checked by the
 /// scorer, not here.
 struct Expectation {
@@ -100,6 +111,7 @@ struct CaseSettings {
   std::optional<BallSpec> ball;
   LightingSpec lighting;
   EffectsSpec effects;
+  CameraErrorSpec camera_error;
   double camera_horizontal_fov_deg = 60.9;  ///< NAO V4/V5 (V6: 56.3)
   bool shadows = true;
   int multisamples = 4;
