@@ -38,6 +38,15 @@ const std::vector<SweptRate> kSweptRates = {
     {"field_features.intersection_detection_rate", "L/T/X", "field_features", "intersections_detected",
      "intersections_in_view", "frames"}};
 
+// Per value of a sweep, beside the rates (not charted: not rates): summary key, label, decimals.
+struct SweptExtra {
+  std::string key;
+  const char* label;
+  int decimals;
+};
+const std::vector<SweptExtra> kSweptExtras = {{"robot_false_positives_per_frame", "robot FP/f", 2},
+                                              {"ball_position_error_m", "ball err m", 3}};
+
 const json& at(const json& j, const std::string& path) {
   static const json kNull;
   const json* n = &j;
@@ -147,6 +156,31 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
     s["rates"][sr.metric] = rates;
     s["below_target"][sr.metric] = ran ? below : json(nullptr);
   }
+  // Beside the rates: the robots' false positives per frame and the detected balls' mean position
+  // error on the ground (metres; what a wrong camera pose costs, sweeps/camera_*_error.yaml).
+  json robot_fp = json::array(), ball_error = json::array();
+  for (double v : values[setting]) {
+    long fp = 0, frames = 0, errors = 0;
+    double error_sum = 0;
+    for (const auto& c : r.at("cases")) {
+      if (!c.at("settings").contains(setting) || c.at("settings").at(setting).get<double>() != v) continue;
+      const auto count = [&](const std::string& path) {
+        const json& n = at(c, path);
+        return n.is_number() ? n.get<long>() : 0L;
+      };
+      fp += count("robot.counts.false_positives");
+      frames += count("robot.counts.detector_frames");
+      const long n = count("ball.counts.position_errors");
+      if (n > 0) {
+        errors += n;
+        error_sum += at(c, "ball.position_error_m").get<double>() * static_cast<double>(n);
+      }
+    }
+    robot_fp.push_back(frames > 0 ? json(static_cast<double>(fp) / frames) : json(nullptr));
+    ball_error.push_back(errors > 0 ? json(error_sum / errors) : json(nullptr));
+  }
+  s["robot_false_positives_per_frame"] = robot_fp;
+  s["ball_position_error_m"] = ball_error;
   return s;
 }
 
@@ -506,6 +540,12 @@ void printBenchTables(const json& results) {
         for (const auto& v : sw.at("rates").at(sr.metric)) std::printf(" %7s", fmt(v, 2).c_str());
         std::printf("   %s\n", belowText(sw, sr.metric).c_str());
       }
+      for (const auto& [key, label, decimals] : kSweptExtras) {
+        if (!sw.contains(key)) continue;
+        std::printf("    %-12s", label);
+        for (const auto& v : sw.at(key)) std::printf(" %7s", fmt(v, decimals).c_str());
+        std::printf("\n");
+      }
     }
   }
 }
@@ -640,6 +680,14 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
     h << sweepChart(sw) << "<ul>";
     for (const auto& sr : kSweptRates) {
       h << "<li>" << esc(sr.label) << ": " << esc(belowText(sw, sr.metric)) << "</li>";
+    }
+    for (const auto& [key, label, decimals] : kSweptExtras) {
+      if (!sw.contains(key)) continue;
+      h << "<li>" << esc(label) << ":";
+      for (std::size_t i = 0; i < sw.at(key).size(); ++i) {
+        h << (i ? ", " : " ") << fmt(sw.at("values")[i], 2) << " &rarr; " << fmt(sw.at(key)[i], decimals);
+      }
+      h << "</li>";
     }
     h << "</ul>";
   }

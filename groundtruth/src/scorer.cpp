@@ -94,7 +94,8 @@ json objectJson(const ObjectTally& t) {
                  {"detected", t.detected},
                  {"should_detect", t.should_detect},
                  {"true_positives", t.true_positives},
-                 {"false_positives", t.false_positives}};
+                 {"false_positives", t.false_positives},
+                 {"position_errors", t.position_errors}};
   return j;
 }
 

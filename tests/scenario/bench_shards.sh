@@ -21,6 +21,12 @@ grep -q '"frames": 13' "$out/merged/results.json" || fail "merged results do not
 grep -Eq "^  hard +2 .*field_features.line_detection_rate >= 1.01$" "$out/whole.log" ||
   fail "the bench's hard-set table does not list the scenario's unmet expectation: $(cat "$out/whole.log")"
 grep -q '"unmet": \[' "$out/merged/results.json" || fail "merged results have no hard-set summary"
+# The sweep's table: each detector's rate per value, then the robots' false positives per frame and
+# the detected balls' mean position error in metres (one number per light scale).
+grep -Eq "^    robot FP/f( +[0-9]+\.[0-9]{2}){4}$" "$out/whole.log" ||
+  fail "the sweep table has no row of robot false positives per frame: $(cat "$out/whole.log")"
+grep -Eq "^    ball err m( +([0-9]+\.[0-9]{3}|absent)){4}$" "$out/whole.log" ||
+  fail "the sweep table has no row of ball position errors: $(cat "$out/whole.log")"
 
 "$bin" merge "$out/s0" "$out/s2" --out "$out/partial" >"$out/partial.log" 2>&1
 rc=$?
