@@ -625,7 +625,8 @@ std::vector<std::uint8_t> dimWindows(const GrayView& image, const IgnoreMask& ig
 
 std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraModel& camera,
                                             const IgnoreMask& ignore, const ContrastRegions& regions,
-                                            const std::vector<RobotPercept>* robots) const {
+                                            const std::vector<RobotPercept>* robots,
+                                            std::optional<double> pixel_noise_gray) const {
   const BallProposerParams& p = params_;
   if (image.empty()) throw Error("ball proposals: empty image");
   if (ignore.width != image.width || ignore.height != image.height) {
@@ -651,7 +652,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   // noises' variances add): its share of the texture term's edges, and the responses' margin below.
   double noise = 0;
   if (p.texture_noise_factor > 0 || p.response_noise_factor > 0) {
-    const double sigma = pixelNoiseGray(image, ignore);
+    const double sigma = pixel_noise_gray ? *pixel_noise_gray : pixelNoiseGray(image, ignore);
     noise = std::sqrt(std::max(0.0, sigma * sigma - p.noise_free_gray * p.noise_free_gray));
   }
   const float edge_floor = static_cast<float>(p.texture_noise_factor * noise);

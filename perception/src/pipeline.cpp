@@ -5,6 +5,7 @@
 
 #include "colorfree/perception/cnn/net.h"
 #include "colorfree/perception/error.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/param_file.h"
 
 namespace colorfree {
@@ -119,6 +120,7 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
     }
     frame.ignore_mask =
         IgnoreMask::combine(*frame.field_boundary, *frame.body_contour, image.width, image.height);
+    frame.pixel_noise_gray = pixelNoiseGray(image, *frame.ignore_mask);
   });
   timed(stats, Stage::kHighContrast,
         [&] { frame.contrast_regions = high_contrast_.run(image, *frame.ignore_mask); });
@@ -128,8 +130,8 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
   if (robot_detector_) {
     RobotProposals proposals;
     timed(stats, Stage::kRobotProposals, [&] {
-      proposals =
-          robot_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions);
+      proposals = robot_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions, false,
+                                      frame.pixel_noise_gray);
     });
     timed(stats, Stage::kRobotDetector, [&] {
       std::vector<RobotProposal> classified;
@@ -149,7 +151,8 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
   if (ball_detector_) {
     timed(stats, Stage::kBallProposals, [&] {
       frame.ball_proposals = ball_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions,
-                                                frame.robot_percepts ? &*frame.robot_percepts : nullptr);
+                                                frame.robot_percepts ? &*frame.robot_percepts : nullptr,
+                                                frame.pixel_noise_gray);
     });
     timed(stats, Stage::kBallDetector, [&] {
       std::vector<BallDecision> decisions;

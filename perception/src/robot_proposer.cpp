@@ -280,7 +280,7 @@ int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int w
 
 RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& camera,
                                   const IgnoreMask& ignore, const ContrastRegions& regions,
-                                  bool keep_rejected) const {
+                                  bool keep_rejected, std::optional<double> pixel_noise_gray) const {
   if (image.empty()) throw Error("robot proposer: empty image");
   if (ignore.width != image.width || ignore.height != image.height) {
     throw Error("robot proposer: ignore mask size does not match the image");
@@ -295,7 +295,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   // The frame's noise raises the jump (each scan pixel is compared on its own).
   const double min_jump =
       p.noise_jump_factor > 0
-          ? std::max(p.min_jump_gray, p.noise_jump_factor * pixelNoiseGray(image, ignore))
+          ? std::max(p.min_jump_gray,
+                     p.noise_jump_factor * (pixel_noise_gray ? *pixel_noise_gray : pixelNoiseGray(image, ignore)))
           : p.min_jump_gray;
   const ScanConstants scan{min_jump, p.jump_ratio, p.carpet_update_weight,
                            1 - p.carpet_dark_decay, p.max_gap_px};

@@ -7,11 +7,13 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "colorfree/perception/ball_detector.h"
 #include "colorfree/perception/ball_proposer.h"
 #include "colorfree/perception/error.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/param_file.h"
 #include "colorfree/perception/pipeline.h"
 #include "synthetic_ball.h"
@@ -267,11 +269,13 @@ test::SyntheticScene darkCarpet(std::uint64_t seed) {
   return s;
 }
 
-std::vector<BallProposal> proposeOnly(const GrayImage& image, const CameraModel& cam, const BallProposerParams& p) {
+// `noise`: the frame's pixel noise as a caller (the pipeline) hands it over; absent: the proposer's own estimate.
+std::vector<BallProposal> proposeOnly(const GrayImage& image, const CameraModel& cam, const BallProposerParams& p,
+                                      std::optional<double> noise = std::nullopt) {
   const PipelineConfig config = PipelineConfig::loadDefault();
   const IgnoreMask ignore = IgnoreMask::all(image.width(), image.height());
   const ContrastRegions regions = HighContrastDetector(config.high_contrast).run(image.view(), ignore);
-  return BallProposer(p).run(image.view(), cam, ignore, regions, nullptr);
+  return BallProposer(p).run(image.view(), cam, ignore, regions, nullptr, noise);
 }
 
 TEST(BallProposer, LowContrastSoftBallInADarkHall) {
@@ -324,6 +328,11 @@ TEST(BallProposer, BallInHeavySensorNoise) {
                                        << "), r=" << b.radius_px << describe(props);
     EXPECT_LT(matchIndex(proposeOnly(image, cam, withoutNoiseTerms(shipped)), b), 0)
         << "found without the noise terms too at " << d << " m";
+    // The noise handed over is the one used: the frame's own estimate proposes the same, a
+    // noise-free claim fails as the terms switched off do.
+    const double sigma = pixelNoiseGray(image.view(), IgnoreMask::all(image.width(), image.height()));
+    EXPECT_EQ(describe(proposeOnly(image, cam, shipped, sigma)), describe(props));
+    EXPECT_LT(matchIndex(proposeOnly(image, cam, shipped, 0.0), b), 0) << "found with a noise of 0 at " << d << " m";
     const Found f = runPipeline(image, cam);
     EXPECT_TRUE(detected(f.balls, b)) << "ball at " << d << " m" << describe(f.proposals);
     EXPECT_LE(f.balls.size(), 1u);

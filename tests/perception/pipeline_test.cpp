@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "colorfree/perception/error.h"
+#include "colorfree/perception/noise.h"
 #include "synthetic_field.h"
 
 namespace colorfree {
@@ -21,6 +22,9 @@ TEST(Pipeline, FillsEveryStageInOrder) {
   EXPECT_GT(frame.contrast_regions->markedCount(), 0);
   EXPECT_TRUE(frame.robot_proposals && frame.robot_percepts);  // the robot stages (issue 7)
   EXPECT_TRUE(frame.ball_proposals && frame.ball_percepts);    // the ball stages (issue 6)
+  // The noise both proposers follow, estimated once over the looked-at area.
+  ASSERT_TRUE(frame.pixel_noise_gray);
+  EXPECT_EQ(*frame.pixel_noise_gray, pixelNoiseGray(image.view(), *frame.ignore_mask));
   for (int i = 0; i < kStageCount; ++i) {
     const Stage s = static_cast<Stage>(i);
     ASSERT_TRUE(stats.timing(s)) << stageName(s);

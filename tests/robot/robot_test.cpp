@@ -566,6 +566,15 @@ TEST(RobotProposer, NoisyFrameKeepsTheFeet) {
   const RobotProposals old = RobotProposer(fixed, FieldDimensions::loadDefault())
                                  .run(img.view(), cam, all, HighContrastDetector().run(img.view(), all));
   EXPECT_FALSE(proposedAt(old, feet, h)) << describe(old);
+
+  // The noise the caller estimated once (the pipeline's Frame) is the one used: the frame's own
+  // estimate gives the same proposals, a noise-free claim the fixed jump's.
+  const RobotProposer shipped(RobotProposerParams::loadDefault(), FieldDimensions::loadDefault());
+  const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
+  const RobotProposals given = shipped.run(img.view(), cam, all, regions, false, pixelNoiseGray(img.view(), all));
+  EXPECT_EQ(describe(given), describe(shipped.run(img.view(), cam, all, regions)));
+  EXPECT_TRUE(proposedAt(given, feet, h)) << describe(given);
+  EXPECT_FALSE(proposedAt(shipped.run(img.view(), cam, all, regions, false, 0.0), feet, h));
 }
 
 TEST(RobotProposer, WrongSizedMaskIsAnError) {

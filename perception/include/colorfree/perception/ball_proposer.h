@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -112,11 +113,13 @@ struct BallProposerParams {
 class BallProposer {
  public:
   explicit BallProposer(BallProposerParams params = {});
-  /// `robots` may be null (no robot detector in the pipeline). Throws colorfree::Error when the
-  /// inputs do not match the image size.
+  /// `robots` may be null (no robot detector in the pipeline). `pixel_noise_gray`: the frame's
+  /// pixelNoiseGray(image, ignore) when the caller has it (the pipeline's Frame does); estimated
+  /// here when absent. Throws colorfree::Error when the inputs do not match the image size.
   std::vector<BallProposal> run(const GrayView& image, const CameraModel& camera,
                                 const IgnoreMask& ignore, const ContrastRegions& regions,
-                                const std::vector<RobotPercept>* robots = nullptr) const;
+                                const std::vector<RobotPercept>* robots = nullptr,
+                                std::optional<double> pixel_noise_gray = std::nullopt) const;
   const BallProposerParams& params() const { return params_; }
 
  private:

@@ -29,6 +29,9 @@ struct Frame {
   std::optional<FieldBoundary> field_boundary;
   std::optional<BodyContour> body_contour;
   std::optional<IgnoreMask> ignore_mask;
+  /// The frame's pixel noise over the looked-at area (pixelNoiseGray, gray levels), estimated once
+  /// with the ignore mask; the robot and ball proposers' thresholds follow it.
+  std::optional<double> pixel_noise_gray;
   std::optional<ContrastRegions> contrast_regions;
   std::optional<FieldLineResult> field_lines;
   /// The robot proposals RobotNet classified: the proposer's, then the held-back ones it freed.

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -138,8 +139,11 @@ struct RobotProposals {
 class RobotProposer {
  public:
   explicit RobotProposer(RobotProposerParams params = {}, FieldDimensions field = {});
+  /// `pixel_noise_gray`: the frame's pixelNoiseGray(image, ignore) when the caller has it (the
+  /// pipeline's Frame does); estimated here when absent.
   RobotProposals run(const GrayView& image, const CameraModel& camera, const IgnoreMask& ignore,
-                     const ContrastRegions& regions, bool keep_rejected = false) const;
+                     const ContrastRegions& regions, bool keep_rejected = false,
+                     std::optional<double> pixel_noise_gray = std::nullopt) const;
   const RobotProposerParams& params() const { return params_; }
 
  private:
