@@ -45,6 +45,7 @@ struct SweptExtra {
   int decimals;
 };
 const std::vector<SweptExtra> kSweptExtras = {{"robot_false_positives_per_frame", "robot FP/f", 2},
+                                              {"robot_position_error_m", "robot err m", 3},
                                               {"ball_position_error_m", "ball err m", 3}};
 
 const json& at(const json& j, const std::string& path) {
@@ -156,12 +157,14 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
     s["rates"][sr.metric] = rates;
     s["below_target"][sr.metric] = ran ? below : json(nullptr);
   }
-  // Beside the rates: the robots' false positives per frame and the detected balls' mean position
-  // error on the ground (metres; what a wrong camera pose costs, sweeps/camera_*_error.yaml).
-  json robot_fp = json::array(), ball_error = json::array();
+  // Beside the rates: the robots' false positives per frame and the detected robots' and balls'
+  // mean position errors on the ground (metres; what a wrong camera pose costs,
+  // sweeps/camera_*_error.yaml).
+  json robot_fp = json::array(), robot_error = json::array(), ball_error = json::array();
   for (double v : values[setting]) {
-    long fp = 0, frames = 0, errors = 0;
-    double error_sum = 0;
+    long fp = 0, frames = 0;
+    long errors[2] = {0, 0};
+    double error_sums[2] = {0, 0};
     for (const auto& c : r.at("cases")) {
       if (!c.at("settings").contains(setting) || c.at("settings").at(setting).get<double>() != v) continue;
       const auto count = [&](const std::string& path) {
@@ -170,16 +173,20 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
       };
       fp += count("robot.counts.false_positives");
       frames += count("robot.counts.detector_frames");
-      const long n = count("ball.counts.position_errors");
-      if (n > 0) {
-        errors += n;
-        error_sum += at(c, "ball.position_error_m").get<double>() * static_cast<double>(n);
+      const char* objects[2] = {"robot", "ball"};
+      for (int o = 0; o < 2; ++o) {
+        const long n = count(std::string(objects[o]) + ".counts.position_errors");
+        if (n <= 0) continue;
+        errors[o] += n;
+        error_sums[o] += at(c, std::string(objects[o]) + ".position_error_m").get<double>() * static_cast<double>(n);
       }
     }
     robot_fp.push_back(frames > 0 ? json(static_cast<double>(fp) / frames) : json(nullptr));
-    ball_error.push_back(errors > 0 ? json(error_sum / errors) : json(nullptr));
+    robot_error.push_back(errors[0] > 0 ? json(error_sums[0] / errors[0]) : json(nullptr));
+    ball_error.push_back(errors[1] > 0 ? json(error_sums[1] / errors[1]) : json(nullptr));
   }
   s["robot_false_positives_per_frame"] = robot_fp;
+  s["robot_position_error_m"] = robot_error;
   s["ball_position_error_m"] = ball_error;
   return s;
 }

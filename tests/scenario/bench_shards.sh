@@ -22,9 +22,11 @@ grep -Eq "^  hard +2 .*field_features.line_detection_rate >= 1.01$" "$out/whole.
   fail "the bench's hard-set table does not list the scenario's unmet expectation: $(cat "$out/whole.log")"
 grep -q '"unmet": \[' "$out/merged/results.json" || fail "merged results have no hard-set summary"
 # The sweep's table: each detector's rate per value, then the robots' false positives per frame and
-# the detected balls' mean position error in metres (one number per light scale).
+# the detected robots' and balls' mean position errors in metres (one number per light scale).
 grep -Eq "^    robot FP/f( +[0-9]+\.[0-9]{2}){4}$" "$out/whole.log" ||
   fail "the sweep table has no row of robot false positives per frame: $(cat "$out/whole.log")"
+grep -Eq "^    robot err m( +([0-9]+\.[0-9]{3}|absent)){4}$" "$out/whole.log" ||
+  fail "the sweep table has no row of robot position errors: $(cat "$out/whole.log")"
 grep -Eq "^    ball err m( +([0-9]+\.[0-9]{3}|absent)){4}$" "$out/whole.log" ||
   fail "the sweep table has no row of ball position errors: $(cat "$out/whole.log")"
 
