@@ -80,7 +80,7 @@ struct EffectsSpec {
 /// rendered and scored with. Zero: the perception gets the true camera.
 struct CameraErrorSpec {
   double pitch_rad = 0;  ///< the believed camera looks this much further down (about its own left axis)
-  double roll_rad = 0;   ///< ... is turned this much about its viewing axis (clockwise as seen by it)
+  double roll_rad = 0;   ///< ... is turned this much about its viewing axis (the camera file's roll_deg sense)
   double yaw_rad = 0;    ///< ... looks this much further left (about the robot's vertical)
   double height_m = 0;   ///< ... sits this much higher
   bool any() const { return pitch_rad != 0 || roll_rad != 0 || yaw_rad != 0 || height_m != 0; }
