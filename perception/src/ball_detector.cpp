@@ -27,6 +27,9 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.smeared_min_radius_px = f.getInRange("smeared_min_radius_px", 0, 1000);
   p.smeared_centre_reach_radii = f.getInRange("smeared_centre_reach_radii", 1, 20);
   p.smeared_centre_min_contrast_gray = f.getInRange("smeared_centre_min_contrast_gray", 0, 255);
+  p.rescale_up = f.getInRange("rescale_up", 0, 4);
+  p.rescale_down = f.getInRange("rescale_down", 0, 1);
+  p.rescale_min_confidence = f.getInRange("rescale_min_confidence", 0, 1);
   f.finish();
   return p;
 }
@@ -198,6 +201,30 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     }
   }
   if (!smeared_boxes.empty()) smeared_net_->classify(image, smeared_boxes, smeared_prob);
+  // Rejected kept patches at other scales.
+  std::vector<cnn::PatchBox> rescaled_boxes;
+  std::vector<std::pair<std::size_t, double>> rescaled;  // (k, scale)
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    if (ball_prob[2 * k + 1] >= params_.ball_min_confidence) continue;
+    for (const double s : {params_.rescale_up, params_.rescale_down}) {
+      if (s <= 0) continue;
+      const BallProposal& p = proposals[kept[k]];
+      rescaled_boxes.push_back(ballPatchBox(p.centre_px, p.radius_px * s, params_.patch_diameters));
+      rescaled.emplace_back(k, s);
+    }
+  }
+  std::vector<float> rescaled_prob;
+  if (!rescaled_boxes.empty()) ball_net_.classify(image, rescaled_boxes, rescaled_prob);
+  std::vector<double> radius_scale(proposals.size(), 1.0);
+  std::vector<float> rescaled_conf(kept.size(), -1.0f);
+  for (std::size_t m = 0; m < rescaled.size(); ++m) {
+    const auto [k, s] = rescaled[m];
+    const float c = rescaled_prob[2 * m + 1];
+    if (c >= params_.rescale_min_confidence && c > rescaled_conf[k]) {
+      rescaled_conf[k] = c;
+      radius_scale[kept[k]] = s;
+    }
+  }
 
   std::vector<BallPercept> out;
   std::vector<BallDecision> all(proposals.size());
@@ -216,6 +243,8 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     all[i].ball_confidence = ball_prob[2 * k + 1];
     if (all[i].ball_confidence >= params_.ball_min_confidence) {
       hits.emplace_back(all[i].ball_confidence, i);
+    } else if (rescaled_conf[k] >= 0) {
+      hits.emplace_back(rescaled_conf[k], i);
     }
     if (smear[k] >= params_.smeared_min_coherence) {
       all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];
@@ -233,7 +262,7 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     all[i].detected = true;
     BallPercept b;
     b.centre_px = smeared_centre[i].value_or(proposals[i].centre_px);
-    b.radius_px = proposals[i].radius_px;
+    b.radius_px = proposals[i].radius_px * radius_scale[i];
     b.confidence = conf;
     b.position_in_robot = camera.pixelToGround(b.centre_px, params_.ball_radius_m);
     out.push_back(b);

@@ -63,6 +63,10 @@ int probe(int argc, char** argv) {
   if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
   if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
   env("BP_SMEAR", config.ball_detector.smeared_min_coherence);
+  env("BP_PATCHD", config.ball_detector.patch_diameters);
+  env("BP_UP", config.ball_detector.rescale_up);
+  env("BP_DOWN", config.ball_detector.rescale_down);
+  env("BP_RESCONF", config.ball_detector.rescale_min_confidence);
   env("BP_SMEARCONF", config.ball_detector.smeared_ball_min_confidence);
   // BP_EXACT=1: each proposal's centre, radius and response also printed in full (hexadecimal).
   const bool exact = std::getenv("BP_EXACT") != nullptr;

@@ -38,6 +38,12 @@ struct BallDetectorParams {
   double smeared_centre_reach_radii = 3;
   /// ... when the smear is at least this much brighter than the carpet beyond its ends.
   double smeared_centre_min_contrast_gray = 8;
+  /// A kept patch BallNet rejects gets a look at rescale_up and at rescale_down times the
+  /// proposal's radius (a camera pose that is off frames the ball too tight or too loose); a score of
+  /// at least rescale_min_confidence there detects it with that radius. 0: no such look.
+  double rescale_up = 1.6;
+  double rescale_down = 0.7;
+  double rescale_min_confidence = 0.99;
 
   bool operator==(const BallDetectorParams&) const = default;
   static BallDetectorParams load(const std::string& path);
@@ -87,7 +93,8 @@ struct BallDecision {
 /// Ball classification (paper 2.4): BoostBallNet (12×12) sorts the proposals by confidence and
 /// keeps at most five; BallNet (26×26) decides; a patch it rejects that the camera's motion smeared
 /// (`smeared_min_coherence`) gets a second look by SmearedBallNet (BallNet's shape, trained on such
-/// patches only).
+/// patches only), and BallNet looks again at it framed larger and smaller (rescale_*: the camera
+/// pose the expected radius came from may be off).
 /// Nets read from perception/models by default.
 class BallDetector {
  public:
