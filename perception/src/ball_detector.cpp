@@ -246,9 +246,10 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     } else if (rescaled_conf[k] >= 0) {
       hits.emplace_back(rescaled_conf[k], i);
     }
+    // (SmearedBallNet's answer counts for a patch the rescaled look did not take: one hit per proposal.)
     if (smear[k] >= params_.smeared_min_coherence) {
       all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];
-      if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence) {
+      if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence && rescaled_conf[k] < 0) {
         hits.emplace_back(all[i].smeared_confidence, i);
         smeared_centre[i] = smearedBallCentre(image, proposals[i].centre_px, proposals[i].radius_px, along[k],
                                               params_.smeared_centre_reach_radii,
