@@ -61,14 +61,6 @@ RobotDetector RobotDetector::loadDefault() {
                        FieldDimensions::loadDefault());
 }
 
-namespace {
-// The fraction of a's area inside b.
-double insideFraction(const PixelBox& a, const PixelBox& b) {
-  const double area = a.width() * a.height();
-  return area > 0 ? boxIntersectionArea(a, b) / area : 0;
-}
-}  // namespace
-
 std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel& camera,
                                         const RobotPercept& percept,
                                         const RobotDetectorParams& params,
@@ -177,7 +169,7 @@ std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
                    [&](int a, int b) { return confidence[a] > confidence[b]; });
   const auto area = [](const PixelBox& b) { return b.width() * b.height(); };
   const auto partOf = [&](const PixelBox& part, const PixelBox& whole) {
-    return area(whole) > area(part) && insideFraction(part, whole) >= params.max_inside_fraction;
+    return area(whole) > area(part) && boxInsideFraction(part, whole) >= params.max_inside_fraction;
   };
   // Most confident first; then a part (a box inside a larger kept one) goes, whichever of the
   // two was the more confident.
@@ -275,7 +267,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     }
     for (std::size_t k = 0; k < seen.size() && !excluded; ++k) {
       excluded = on_own_bar[k] &&
-                 insideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
+                 boxInsideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
     }
     if (!excluded) accepted[i] = robot[i];
   }

@@ -213,19 +213,14 @@ int probe(int argc, char** argv) {
           frame_miss = true;
           // What it covers: the true robot (demanded or not) and the other percept it overlaps most
           // (intersection over this box's area).
-          const auto inside = [&](const PixelBox& a, const PixelBox& b) {
-            const double w = std::max(0.0, std::min(a.x1, b.x1) - std::max(a.x0, b.x0));
-            const double h = std::max(0.0, std::min(a.y1, b.y1) - std::max(a.y0, b.y0));
-            return a.width() * a.height() > 0 ? w * h / (a.width() * a.height()) : 0.0;
-          };
           int on_robot = -1, on_percept = -1;
           double best_r = 0, best_p = 0;
           for (const RobotInImage& r : truth.robots) {
-            if (r.in_view && inside(p.box, r.box) > best_r) best_r = inside(p.box, r.box), on_robot = r.index;
+            if (r.in_view && boxInsideFraction(p.box, r.box) > best_r) best_r = boxInsideFraction(p.box, r.box), on_robot = r.index;
           }
           for (std::size_t j = 0; j < percepts.size(); ++j) {
-            if (&percepts[j] != &p && inside(p.box, percepts[j].box) > best_p) {
-              best_p = inside(p.box, percepts[j].box), on_percept = static_cast<int>(j);
+            if (&percepts[j] != &p && boxInsideFraction(p.box, percepts[j].box) > best_p) {
+              best_p = boxInsideFraction(p.box, percepts[j].box), on_percept = static_cast<int>(j);
             }
           }
           std::printf("   FALSE POSITIVE feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) conf=%.3f on R%d %.2f, "

@@ -23,6 +23,12 @@ inline double boxIntersectionArea(const PixelBox& a, const PixelBox& b) {
   return ix * iy;
 }
 
+/// The fraction of a's area inside b (0 when a is empty).
+inline double boxInsideFraction(const PixelBox& a, const PixelBox& b) {
+  const double area = a.width() * a.height();
+  return area > 0 ? boxIntersectionArea(a, b) / area : 0.0;
+}
+
 /// Intersection over union of two boxes (0 when both are empty).
 inline double boxIou(const PixelBox& a, const PixelBox& b) {
   const double inter = boxIntersectionArea(a, b);
