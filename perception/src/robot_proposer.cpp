@@ -24,6 +24,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.min_run_height_fraction = f.getInRange("min_run_height_fraction", 0, 1);
   p.min_fill_fraction = f.getInRange("min_fill_fraction", 0, 1);
   p.beside_width_factor = f.getInRange("beside_width_factor", 0, 10);
+  p.border_reference_beside = f.get<bool>("border_reference_beside");
   p.line_stripe_factor = f.getInRange("line_stripe_factor", 0, 100);
   p.line_beside_width_factor = f.getInRange("line_beside_width_factor", 0, 10);
   p.knee_gap_height_fraction = f.getInRange("knee_gap_height_fraction", 0, 1);
@@ -327,6 +328,20 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         // black patches), against which the real carpet above would count as a robot's legs in
         // shade. There only pixels brighter than the reference fill a robot's run.
         const bool carpet_unknown = y_hi == bottom - 1;
+        if (carpet_unknown && p.border_reference_beside) {
+          // The reference starts at the darkest of its pixel and of those beside_width_factor
+          // robot widths to its left and right (inside the field, outside the own body): a robot
+          // cut by the border starts brighter than the carpet beside it, and its run starts at
+          // the border (README robot19).
+          if (const auto h = camera.robotHeightPx({x + 0.5, y_hi + 1.0}, robot_height_m_)) {
+            const int side = static_cast<int>(std::lround(p.beside_width_factor * *h * width_per_height));
+            for (const int xs : {x - side, x + side}) {
+              if (side > 0 && xs >= 0 && xs < image.width && ignore.bottom_y[xs] > y_hi && ignore.top_y[xs] <= y_hi) {
+                carpet = std::min(carpet, static_cast<double>(image.row(y_hi)[xs]));
+              }
+            }
+          }
+        }
         // The reference the robot must be brighter than: the running carpet luminance, but after
         // a darker stretch (a shadow, the ball's black patches) it falls back to it only by
         // carpet_dark_decay per row, so the carpet after a short dark stretch is no robot.

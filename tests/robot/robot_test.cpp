@@ -243,6 +243,31 @@ TEST(RobotProposer, CarpetAboveADarkPatchAtTheLowerBorderIsNoRobot) {
   EXPECT_FALSE(unchecked.proposals.empty()) << describe(unchecked);
 }
 
+TEST(RobotProposer, NearRobotWhoseFeetTheLowerBorderCutsStandsAtTheBorder) {
+  // A robot 0.55 m away: its feet are below the image, its legs reach the lower border. The scan
+  // lines through the legs start on them; measured against the carpet beside the robot they are
+  // a robot's, and its box stands at the border (game.yaml's near robot, README robot19). Against
+  // the lowest pixel alone the legs were the carpet.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(11);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {0.55, 0.0});
+  ASSERT_GT(feet.y(), 480);  // the feet are cut off
+  const auto near_border = [&](const RobotProposals& out) {
+    for (const RobotProposal& p : out.proposals) {
+      if (p.feet_px.y() >= 470 && std::abs(p.feet_px.x() - feet.x()) <= 0.15 * robotSizePx(cam, feet).h) return true;
+    }
+    return false;
+  };
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  const RobotProposals out = RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  EXPECT_TRUE(near_border(out)) << "feet " << feet.transpose() << describe(out);
+  params.border_reference_beside = false;
+  const RobotProposals lowest = RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  EXPECT_FALSE(near_border(lowest)) << describe(lowest);
+}
+
 TEST(RobotProposer, BallCutByTheLowerBorderHidesNoRobotBehindIt) {
   // A ball at the lower border (white with black patches): the carpet above its patches is no
   // robot, and no box standing on it drops the feet of a far robot in its upper half.

@@ -47,6 +47,11 @@ struct RobotProposerParams {
   /// reference fills a run only when it is brighter by the jump than the pixel this many expected
   /// robot widths to its left or to its right too (the carpet beside the robot). 0: no such test.
   double beside_width_factor = 1.0;
+  /// There the reference the robot must be brighter than starts at the darkest of the stretch's
+  /// lowest pixel and the pixels beside_width_factor robot widths to its left and right: a near
+  /// robot whose feet the border cuts starts on its own foot or shin, which would otherwise be
+  /// the carpet and hide the legs above it. false: the lowest pixel alone.
+  bool border_reference_beside = true;
   /// A lit stretch at a run's lower end no taller than this many field-line widths seen there,
   /// with more than the gap of unlit rows above it (carpet, or shade the run would take for legs)
   /// and lit pixels line_beside_width_factor expected robot widths to its left or right (a line
