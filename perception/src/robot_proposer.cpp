@@ -277,6 +277,72 @@ int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int w
   return beside && y + 1 - stripe_top <= max_stripe_px() ? stripe_top - 1 : -1;
 }
 
+
+// Whether feet point f lies in the lower part of the box of `kept`, a nearer robot's (its knee,
+// hip or hand, or a robot beside or behind it): the proposer holds such a candidate back.
+bool inLowerPart(const Eigen::Vector2d& f, const RobotProposal& kept, double lower_part_fraction) {
+  const double h = kept.box.height();
+  return f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() < kept.feet_px.y() - 0.1 * h &&
+         f.y() > kept.feet_px.y() - lower_part_fraction * h;
+}
+
+// A kept box whose feet point lies in the lower part of a nearer box kept after it, in the
+// proposals [behind_from, behind_to) (boxes behind a still nearer one come after the free-standing
+// ones), is held back behind it, as it would have been had the nearer box come first. A held-back
+// candidate that stood behind such a box stands behind the boxes of those it lies in the lower
+// part of, or, with none, is a proposal.
+void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_to, double lower_part_fraction) {
+  const int n = static_cast<int>(out.proposals.size());
+  std::vector<int> order(n);
+  for (int i = 0; i < n; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return out.proposals[a].feet_px.y() > out.proposals[b].feet_px.y();
+  });
+  std::vector<std::vector<int>> nearer(n);
+  std::vector<bool> held(n, false);
+  for (int i : order) {
+    for (int j = std::max(i + 1, behind_from); j < behind_to; ++j) {
+      if (!held[j] && inLowerPart(out.proposals[i].feet_px, out.proposals[j], lower_part_fraction)) {
+        nearer[i].push_back(j);
+      }
+    }
+    held[i] = !nearer[i].empty();
+  }
+  if (std::none_of(held.begin(), held.end(), [](bool h) { return h; })) return;
+  std::vector<int> index(n, -1);
+  std::vector<RobotProposal> kept;
+  for (int i = 0; i < n; ++i) {
+    if (held[i]) continue;
+    index[i] = static_cast<int>(kept.size());
+    kept.push_back(out.proposals[i]);
+  }
+  std::vector<HeldBackRobotProposal> held_back;
+  for (HeldBackRobotProposal& h : out.held_back) {
+    std::vector<int> now;
+    for (int k : h.nearer) {
+      for (int m : held[k] ? nearer[k] : std::vector<int>{k}) {
+        if ((m == k || inLowerPart(h.proposal.feet_px, out.proposals[m], lower_part_fraction)) &&
+            std::find(now.begin(), now.end(), index[m]) == now.end()) {
+          now.push_back(index[m]);
+        }
+      }
+    }
+    if (now.empty()) {
+      kept.push_back(h.proposal);
+    } else {
+      held_back.push_back({h.proposal, now});
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!held[i]) continue;
+    std::vector<int> now;
+    for (int m : nearer[i]) now.push_back(index[m]);
+    held_back.push_back({out.proposals[i], now});
+  }
+  out.proposals = std::move(kept);
+  out.held_back = std::move(held_back);
+}
+
 }  // namespace
 
 RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& camera,
@@ -587,12 +653,14 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
       keep(c, true);
     }
   }
+  const int behind_from = static_cast<int>(out.proposals.size());
   for (const Candidate* c : behind) keep(*c, false);
+  const int behind_to = static_cast<int>(out.proposals.size());
   for (const Candidate* c : wide) keep(*c, false);
   // The knee candidates: groups of all feet points that hold a knee-bridged one (a robot whose
   // feet only some scan lines reach over the knee gap is one group, not two too narrow for a
   // robot), besides the others under their own cap, held back as the others are.
-  if (knee_feet.empty()) return out;
+  if (!knee_feet.empty()) {
   int knee_kept = 0;
   std::vector<FeetPoint> all_feet(feet.size() + knee_feet.size());
   std::merge(feet.begin(), feet.end(), knee_feet.begin(), knee_feet.end(), all_feet.begin(),
@@ -613,6 +681,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
                                                       : RobotRejectReason::kOverlap});
     }
   }
+  }
+  holdBackBehindLaterNearer(out, behind_from, behind_to, p.own_body_height_fraction);
   return out;
 }
 

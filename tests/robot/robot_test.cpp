@@ -268,6 +268,43 @@ TEST(RobotProposer, NearRobotWhoseFeetTheLowerBorderCutsStandsAtTheBorder) {
   EXPECT_FALSE(near_border(lowest)) << describe(lowest);
 }
 
+TEST(RobotProposer, HandOfARobotBehindANearerOneIsHeldBackBehindIt) {
+  // A at 0.9 m; B at 2 m behind A's right side (its feet in A's box, above A's knees: B's box
+  // comes after the free-standing ones); B's hand out to the right of A's box, 0.22 of B's height
+  // above B's feet. The hand's box is free-standing, so it is kept before B's. Once B's box is
+  // kept, the hand lies in its lower part: it is held back behind B (README robot19), as a hand
+  // found after its robot's box is.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(12);
+  const Eigen::Vector2d b_feet = drawRobot(img, cam, {2.0, -0.05});
+  const Eigen::Vector2d a_feet = drawRobot(img, cam, {0.9, 0.15});
+  const double b_h = robotSizePx(cam, b_feet).h;
+  const int hand_x = static_cast<int>(b_feet.x()) + 44;
+  const int hand_y = static_cast<int>(b_feet.y() - 0.22 * b_h);
+  cv::rectangle(wrap(img), cv::Point(hand_x - 9, hand_y - 70), cv::Point(hand_x + 9, hand_y - 1),
+                cv::Scalar(205), cv::FILLED);
+  const RobotProposals out = propose(img, cam);
+  const auto near = [&](const RobotProposal& p, const Eigen::Vector2d& f) {
+    return std::abs(p.feet_px.y() - f.y()) <= 4 && std::abs(p.feet_px.x() - f.x()) <= 14;
+  };
+  int a = -1, b = -1;
+  for (std::size_t i = 0; i < out.proposals.size(); ++i) {
+    if (near(out.proposals[i], a_feet)) a = static_cast<int>(i);
+    if (near(out.proposals[i], b_feet)) b = static_cast<int>(i);
+    EXPECT_FALSE(near(out.proposals[i], {hand_x, hand_y})) << "the hand is a proposal" << describe(out);
+  }
+  ASSERT_GE(a, 0) << "A at " << a_feet.transpose() << describe(out);
+  ASSERT_GE(b, 0) << "B at " << b_feet.transpose() << describe(out);
+  bool held = false;
+  for (const HeldBackRobotProposal& h : out.held_back) {
+    if (near(h.proposal, {hand_x, hand_y})) {
+      held = true;
+      EXPECT_EQ(h.nearer, std::vector<int>{b});
+    }
+  }
+  EXPECT_TRUE(held) << "hand at " << hand_x << ", " << hand_y << describe(out);
+}
+
 TEST(RobotProposer, BallCutByTheLowerBorderHidesNoRobotBehindIt) {
   // A ball at the lower border (white with black patches): the carpet above its patches is no
   // robot, and no box standing on it drops the feet of a far robot in its upper half.
