@@ -17,6 +17,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.max_inside_fraction = f.getInRange("max_inside_fraction", 0, 1);
   p.min_held_back_confidence = f.getInRange("min_held_back_confidence", 0, 1);
   p.min_behind_robot_confidence = f.getInRange("min_behind_robot_confidence", 0, 1);
+  p.behind_lower_part_fraction = f.getInRange("behind_lower_part_fraction", 0, 1);
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
   p.shin_reach_width_fraction = f.getInRange("shin_reach_width_fraction", 0, 5);
   p.shin_min_jump_gray = f.getInRange("shin_min_jump_gray", 1, 255);
@@ -270,6 +271,28 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
                  boxInsideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
     }
     if (!excluded) accepted[i] = robot[i];
+  }
+  // An accepted box whose feet lie in the lower part of a nearer accepted box (lower in the
+  // image, taken first) is that robot's knee or hand, or a robot behind it: it stays only from
+  // min_behind_robot_confidence, as a held-back candidate behind a robot does. (The proposer holds
+  // such candidates back only behind boxes it kept before them.)
+  if (params_.behind_lower_part_fraction > 0) {
+    std::vector<int> order;
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+      if (accepted[i] > 0) order.push_back(static_cast<int>(i));
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return seen[a].feet_px.y() > seen[b].feet_px.y(); });
+    std::vector<int> standing;
+    for (int i : order) {
+      bool behind = false;
+      for (int k : standing) behind |= feetInLowerPart(seen[i].feet_px, seen[k], params_.behind_lower_part_fraction);
+      if (behind && accepted[i] < params_.min_behind_robot_confidence) {
+        accepted[i] = 0;
+      } else {
+        standing.push_back(i);
+      }
+    }
   }
   std::vector<RobotPercept> out;
   for (int i : keptRobotBoxes(proposal_boxes, accepted, params_)) {

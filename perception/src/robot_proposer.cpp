@@ -278,14 +278,6 @@ int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int w
 }
 
 
-// Whether feet point f lies in the lower part of the box of `kept`, a nearer robot's (its knee,
-// hip or hand, or a robot beside or behind it): the proposer holds such a candidate back.
-bool inLowerPart(const Eigen::Vector2d& f, const RobotProposal& kept, double lower_part_fraction) {
-  const double h = kept.box.height();
-  return f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() < kept.feet_px.y() - 0.1 * h &&
-         f.y() > kept.feet_px.y() - lower_part_fraction * h;
-}
-
 // A kept box whose feet point lies in the lower part of a nearer box kept after it, in the
 // proposals [behind_from, behind_to) (boxes behind a still nearer one come after the free-standing
 // ones), is held back behind it, as it would have been had the nearer box come first. A held-back
@@ -302,7 +294,7 @@ void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_
   std::vector<bool> held(n, false);
   for (int i : order) {
     for (int j = std::max(i + 1, behind_from); j < behind_to; ++j) {
-      if (!held[j] && inLowerPart(out.proposals[i].feet_px, out.proposals[j], lower_part_fraction)) {
+      if (!held[j] && feetInLowerPart(out.proposals[i].feet_px, out.proposals[j], lower_part_fraction)) {
         nearer[i].push_back(j);
       }
     }
@@ -321,7 +313,7 @@ void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_
     std::vector<int> now;
     for (int k : h.nearer) {
       for (int m : held[k] ? nearer[k] : std::vector<int>{k}) {
-        if ((m == k || inLowerPart(h.proposal.feet_px, out.proposals[m], lower_part_fraction)) &&
+        if ((m == k || feetInLowerPart(h.proposal.feet_px, out.proposals[m], lower_part_fraction)) &&
             std::find(now.begin(), now.end(), index[m]) == now.end()) {
           now.push_back(index[m]);
         }
@@ -610,12 +602,10 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
     for (std::size_t k = 0; k < out.proposals.size(); ++k) {
       const RobotProposal& kept = out.proposals[k];
       const Eigen::Vector2d& f = c.proposal.feet_px;
-      const double kept_h = kept.box.height();
       const bool in_column = f.x() > kept.box.x0 && f.x() < kept.box.x1;
-      const bool below_top = f.y() < kept.feet_px.y() - 0.1 * kept_h;
-      const bool lower_part = f.y() > kept.feet_px.y() - p.own_body_height_fraction * kept_h;
+      const bool below_top = f.y() < kept.feet_px.y() - 0.1 * kept.box.height();
       if (overlaps(kept, c, knee)) return Fit::kOverlap;
-      if (in_column && below_top && lower_part) {
+      if (feetInLowerPart(f, kept, p.own_body_height_fraction)) {
         nearer.push_back(static_cast<int>(k));
       } else if (in_column && below_top && f.y() > kept.box.y0) {
         result = Fit::kBehind;

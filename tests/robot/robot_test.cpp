@@ -792,6 +792,40 @@ TEST(RobotDetector, ABoxBehindARobotOverlappingItLikeARobotIsItsKneeOrHand) {
   EXPECT_EQ(robots[0].box.x0, near.box.x0);
 }
 
+TEST(RobotDetector, AnAcceptedBoxAtANearerRobotsKneesNeedsTheBarBehindARobot) {
+  // Two proposals RobotNet accepts: a near robot, and a box whose feet lie in the near box's
+  // column 0.27 of its height above its feet (its knee or hand, or a robot behind it), which
+  // overlaps it too little to be dropped as an overlap or a part. The proposer kept it as a
+  // proposal (it came first). It stays only from min_behind_robot_confidence (README robot19).
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(200, 100), cv::Point(299, 399), cv::Scalar(200), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(300, 230), cv::Point(323, 319), cv::Scalar(44), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const RobotProposal near = proposal(pixelBox(200, 100, 300, 400));
+  const RobotProposal knee = proposal(pixelBox(264, 230, 324, 320));
+  ASSERT_TRUE(feetInLowerPart(knee.feet_px, near, 0.4));
+  ASSERT_LT(boxIou(knee.box, near.box), 0.3);
+  RobotDetectorParams params;
+  std::vector<RobotProposal> classified;
+  std::vector<float> confidences;
+  auto robots = brightnessDetector(params).run(img.view(), cam, {knee, near}, {}, &classified, &confidences);
+  ASSERT_EQ(confidences.size(), 2u);
+  EXPECT_GT(confidences[0], params.min_confidence);
+  EXPECT_LT(confidences[0], params.min_behind_robot_confidence);
+  ASSERT_EQ(robots.size(), 1u);
+  EXPECT_EQ(robots[0].box.x0, near.box.x0);
+  // Without the test both stay.
+  RobotDetectorParams off = params;
+  off.behind_lower_part_fraction = 0;
+  EXPECT_EQ(brightnessDetector(off).run(img.view(), cam, {knee, near}, {}, nullptr, nullptr).size(), 2u);
+  // RobotNet sure of it: a robot behind the near one, kept.
+  cv::rectangle(wrap(img), cv::Point(300, 230), cv::Point(323, 319), cv::Scalar(170), cv::FILLED);
+  robots = brightnessDetector(params).run(img.view(), cam, {knee, near}, {}, &classified, &confidences);
+  ASSERT_EQ(confidences.size(), 2u);
+  EXPECT_GT(confidences[0], params.min_behind_robot_confidence);
+  EXPECT_EQ(robots.size(), 2u);
+}
+
 // A percept as the proposer and RobotNet would give it with its feet at `feet` (the proposer's
 // box: 1.25 robot widths, 1.08 heights, 0.04 of a height below the feet).
 RobotPercept perceptAt(const CameraModel& cam, const Eigen::Vector2d& feet) {

@@ -57,6 +57,18 @@ struct RobotProposal {
   Eigen::Vector2d feet_px = Eigen::Vector2d::Zero();  ///< the robot's ground point in the image
 };
 
+/// Whether a robot candidate's feet point lies in the lower part of a nearer robot's box: in its
+/// column, at least 0.1 and less than `lower_part_fraction` of its height above its feet, where
+/// that robot's knee, crotch or hand would be (a NAO's hands hang at about 0.37 of its height), or
+/// the feet of a robot beside or behind it.
+inline bool feetInLowerPart(const Eigen::Vector2d& feet_px, const RobotProposal& nearer,
+                            double lower_part_fraction) {
+  const double h = nearer.box.height();
+  return feet_px.x() > nearer.box.x0 && feet_px.x() < nearer.box.x1 &&
+         feet_px.y() < nearer.feet_px.y() - 0.1 * h &&
+         feet_px.y() > nearer.feet_px.y() - lower_part_fraction * h;
+}
+
 /// A robot candidate the proposal stage held back: its feet point lies in the lower part of
 /// nearer proposals' boxes, where that robot's knee or hand would be. It is another robot (beside
 /// or behind) only where none of those nearer boxes holds a robot.

@@ -31,6 +31,11 @@ struct RobotDetectorParams {
   /// max_overlap_iou (it is that robot's knee or hand, which RobotNet may score higher than the
   /// robot). 1: such candidates are not classified.
   double min_behind_robot_confidence = 0.97;
+  /// An accepted box whose feet point lies in the lower part of a nearer accepted box (up to this
+  /// fraction of its height above its feet: feetInLowerPart; the proposer's
+  /// own_body_height_fraction) stays only from min_behind_robot_confidence too, wherever the
+  /// proposer put it: it is that robot's knee or hand, or a robot behind it. 0: no such test.
+  double behind_lower_part_fraction = 0.4;
   /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
   /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
   /// stand at the knees or thighs, its box too high. The lit stretch below the feet at most this
