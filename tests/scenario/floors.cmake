@@ -42,3 +42,10 @@ colorfree_floor_test(orientation_dynamic_floor ci/orientation_dynamic_ci.yaml 4
 # positives per frame). One more miss or false positive is the margin.
 colorfree_floor_test(ball_noise_floor sweeps/camera_noise.yaml 3
   "ball.detection_rate >= 0.90" "ball.false_positives_per_frame <= 0.10")
+
+# Robots beside the ball at the observer's feet (the hard set's 12 cases x 8 frames, 60 robot-frames
+# to detect). Measured: detection 0.750, false positives 0.021 per frame (robot19: near robots cut
+# by the lower border proposed, and boxes at a nearer robot's knees held to the bar behind a robot;
+# before: 0.617 and 0.083). Two robot-frames and two false positives are the margin.
+colorfree_floor_test(robot_hard_feet_floor ball_hard_feet.yaml 8
+  "robot.detection_rate >= 0.72" "robot.false_positives_per_frame <= 0.05")
