@@ -277,13 +277,14 @@ int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int w
   return beside && y + 1 - stripe_top <= max_stripe_px() ? stripe_top - 1 : -1;
 }
 
-
 // A kept box whose feet point lies in the lower part of a nearer box kept after it, in the
 // proposals [behind_from, behind_to) (boxes behind a still nearer one come after the free-standing
 // ones), is held back behind it, as it would have been had the nearer box come first. A held-back
-// candidate that stood behind such a box stands behind the boxes of those it lies in the lower
-// part of, or, with none, is a proposal.
-void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_to, double lower_part_fraction) {
+// candidate that stood behind such a box stands behind those of that box's nearer boxes it lies
+// in the lower part of, or, with none, is a proposal, as it would have been (then one or two more
+// proposals than max_proposals may reach RobotNet).
+void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_to,
+                               double lower_part_fraction) {
   const int n = static_cast<int>(out.proposals.size());
   std::vector<int> order(n);
   for (int i = 0; i < n; ++i) order[i] = i;
@@ -294,7 +295,8 @@ void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_
   std::vector<bool> held(n, false);
   for (int i : order) {
     for (int j = std::max(i + 1, behind_from); j < behind_to; ++j) {
-      if (!held[j] && feetInLowerPart(out.proposals[i].feet_px, out.proposals[j], lower_part_fraction)) {
+      if (!held[j] &&
+          feetInLowerPart(out.proposals[i].feet_px, out.proposals[j], lower_part_fraction)) {
         nearer[i].push_back(j);
       }
     }
@@ -313,7 +315,8 @@ void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_
     std::vector<int> now;
     for (int k : h.nearer) {
       for (int m : held[k] ? nearer[k] : std::vector<int>{k}) {
-        if ((m == k || feetInLowerPart(h.proposal.feet_px, out.proposals[m], lower_part_fraction)) &&
+        if ((m == k ||
+             feetInLowerPart(h.proposal.feet_px, out.proposals[m], lower_part_fraction)) &&
             std::find(now.begin(), now.end(), index[m]) == now.end()) {
           now.push_back(index[m]);
         }
@@ -392,9 +395,11 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
           // cut by the border starts brighter than the carpet beside it, and its run starts at
           // the border (README robot19).
           if (const auto h = camera.robotHeightPx({x + 0.5, y_hi + 1.0}, robot_height_m_)) {
-            const int side = static_cast<int>(std::lround(p.beside_width_factor * *h * width_per_height));
+            const int side =
+                static_cast<int>(std::lround(p.beside_width_factor * *h * width_per_height));
             for (const int xs : {x - side, x + side}) {
-              if (side > 0 && xs >= 0 && xs < image.width && ignore.bottom_y[xs] > y_hi && ignore.top_y[xs] <= y_hi) {
+              if (side > 0 && xs >= 0 && xs < image.width && ignore.bottom_y[xs] > y_hi &&
+                  ignore.top_y[xs] <= y_hi) {
                 carpet = std::min(carpet, static_cast<double>(image.row(y_hi)[xs]));
               }
             }
@@ -651,26 +656,26 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   // feet only some scan lines reach over the knee gap is one group, not two too narrow for a
   // robot), besides the others under their own cap, held back as the others are.
   if (!knee_feet.empty()) {
-  int knee_kept = 0;
-  std::vector<FeetPoint> all_feet(feet.size() + knee_feet.size());
-  std::merge(feet.begin(), feet.end(), knee_feet.begin(), knee_feet.end(), all_feet.begin(),
-             [](const FeetPoint& a, const FeetPoint& b) { return a.x < b.x; });
-  for (const Candidate& c : candidatesOf(all_feet, true)) {
-    // (One overlapping a held-back candidate is that candidate again, a bridged point joined.)
-    bool again = false;
-    for (const HeldBackRobotProposal& h : out.held_back) again |= overlaps(h.proposal, c, true);
-    const Fit f = again ? Fit::kOverlap : fit(c, true);
-    if (f == Fit::kHeldBack && static_cast<int>(out.held_back.size()) < p.max_held_back) {
-      out.held_back.push_back({c.proposal, nearer});
-    } else if ((f == Fit::kFree || f == Fit::kBehind) && knee_kept < p.max_knee_proposals) {
-      out.proposals.push_back(c.proposal);
-      ++knee_kept;
-    } else if (keep_rejected) {
-      out.rejected.push_back({c.proposal.feet_px, f == Fit::kFree || f == Fit::kBehind
-                                                      ? RobotRejectReason::kTooMany
-                                                      : RobotRejectReason::kOverlap});
+    int knee_kept = 0;
+    std::vector<FeetPoint> all_feet(feet.size() + knee_feet.size());
+    std::merge(feet.begin(), feet.end(), knee_feet.begin(), knee_feet.end(), all_feet.begin(),
+               [](const FeetPoint& a, const FeetPoint& b) { return a.x < b.x; });
+    for (const Candidate& c : candidatesOf(all_feet, true)) {
+      // (One overlapping a held-back candidate is that candidate again, a bridged point joined.)
+      bool again = false;
+      for (const HeldBackRobotProposal& h : out.held_back) again |= overlaps(h.proposal, c, true);
+      const Fit f = again ? Fit::kOverlap : fit(c, true);
+      if (f == Fit::kHeldBack && static_cast<int>(out.held_back.size()) < p.max_held_back) {
+        out.held_back.push_back({c.proposal, nearer});
+      } else if ((f == Fit::kFree || f == Fit::kBehind) && knee_kept < p.max_knee_proposals) {
+        out.proposals.push_back(c.proposal);
+        ++knee_kept;
+      } else if (keep_rejected) {
+        out.rejected.push_back({c.proposal.feet_px, f == Fit::kFree || f == Fit::kBehind
+                                                        ? RobotRejectReason::kTooMany
+                                                        : RobotRejectReason::kOverlap});
+      }
     }
-  }
   }
   holdBackBehindLaterNearer(out, behind_from, behind_to, p.own_body_height_fraction);
   return out;

@@ -254,17 +254,21 @@ TEST(RobotProposer, NearRobotWhoseFeetTheLowerBorderCutsStandsAtTheBorder) {
   ASSERT_GT(feet.y(), 480);  // the feet are cut off
   const auto near_border = [&](const RobotProposals& out) {
     for (const RobotProposal& p : out.proposals) {
-      if (p.feet_px.y() >= 470 && std::abs(p.feet_px.x() - feet.x()) <= 0.15 * robotSizePx(cam, feet).h) return true;
+      if (p.feet_px.y() >= 470 &&
+          std::abs(p.feet_px.x() - feet.x()) <= 0.15 * robotSizePx(cam, feet).h)
+        return true;
     }
     return false;
   };
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
   const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
   RobotProposerParams params = RobotProposerParams::loadDefault();
-  const RobotProposals out = RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  const RobotProposals out = RobotProposer(params, FieldDimensions::loadDefault())
+                                 .run(img.view(), cam, all, regions, true);
   EXPECT_TRUE(near_border(out)) << "feet " << feet.transpose() << describe(out);
   params.border_reference_beside = false;
-  const RobotProposals lowest = RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
+  const RobotProposals lowest = RobotProposer(params, FieldDimensions::loadDefault())
+                                    .run(img.view(), cam, all, regions, true);
   EXPECT_FALSE(near_border(lowest)) << describe(lowest);
 }
 
@@ -291,7 +295,8 @@ TEST(RobotProposer, HandOfARobotBehindANearerOneIsHeldBackBehindIt) {
   for (std::size_t i = 0; i < out.proposals.size(); ++i) {
     if (near(out.proposals[i], a_feet)) a = static_cast<int>(i);
     if (near(out.proposals[i], b_feet)) b = static_cast<int>(i);
-    EXPECT_FALSE(near(out.proposals[i], {hand_x, hand_y})) << "the hand is a proposal" << describe(out);
+    EXPECT_FALSE(near(out.proposals[i], {hand_x, hand_y}))
+        << "the hand is a proposal" << describe(out);
   }
   ASSERT_GE(a, 0) << "A at " << a_feet.transpose() << describe(out);
   ASSERT_GE(b, 0) << "B at " << b_feet.transpose() << describe(out);
@@ -808,7 +813,8 @@ TEST(RobotDetector, AnAcceptedBoxAtANearerRobotsKneesNeedsTheBarBehindARobot) {
   RobotDetectorParams params;
   std::vector<RobotProposal> classified;
   std::vector<float> confidences;
-  auto robots = brightnessDetector(params).run(img.view(), cam, {knee, near}, {}, &classified, &confidences);
+  auto robots =
+      brightnessDetector(params).run(img.view(), cam, {knee, near}, {}, &classified, &confidences);
   ASSERT_EQ(confidences.size(), 2u);
   EXPECT_GT(confidences[0], params.min_confidence);
   EXPECT_LT(confidences[0], params.min_behind_robot_confidence);
@@ -817,10 +823,12 @@ TEST(RobotDetector, AnAcceptedBoxAtANearerRobotsKneesNeedsTheBarBehindARobot) {
   // Without the test both stay.
   RobotDetectorParams off = params;
   off.behind_lower_part_fraction = 0;
-  EXPECT_EQ(brightnessDetector(off).run(img.view(), cam, {knee, near}, {}, nullptr, nullptr).size(), 2u);
+  EXPECT_EQ(brightnessDetector(off).run(img.view(), cam, {knee, near}, {}, nullptr, nullptr).size(),
+            2u);
   // RobotNet sure of it: a robot behind the near one, kept.
   cv::rectangle(wrap(img), cv::Point(300, 230), cv::Point(323, 319), cv::Scalar(170), cv::FILLED);
-  robots = brightnessDetector(params).run(img.view(), cam, {knee, near}, {}, &classified, &confidences);
+  robots =
+      brightnessDetector(params).run(img.view(), cam, {knee, near}, {}, &classified, &confidences);
   ASSERT_EQ(confidences.size(), 2u);
   EXPECT_GT(confidences[0], params.min_behind_robot_confidence);
   EXPECT_EQ(robots.size(), 2u);
