@@ -169,8 +169,17 @@ std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
   std::stable_sort(order.begin(), order.end(),
                    [&](int a, int b) { return confidence[a] > confidence[b]; });
   const auto area = [](const PixelBox& b) { return b.width() * b.height(); };
-  const auto partOf = [&](const PixelBox& part, const PixelBox& whole) {
-    return area(whole) > area(part) && boxInsideFraction(part, whole) >= params.max_inside_fraction;
+  // Box i lies inside the larger box k: it is k's part (hand, arm), but for a box RobotNet is sure
+  // of (min_behind_robot_confidence) standing above k's lower part: a robot behind k, the near
+  // robot's box reaching round it (boxes' lower edges stand as far below their feet points).
+  const auto partOf = [&](int i, int k) {
+    const PixelBox &part = boxes[i], &whole = boxes[k];
+    if (area(whole) <= area(part) || boxInsideFraction(part, whole) < params.max_inside_fraction) {
+      return false;
+    }
+    return !(params.behind_lower_part_fraction > 0 &&
+             confidence[i] >= params.min_behind_robot_confidence &&
+             part.y1 < whole.y1 - params.behind_lower_part_fraction * whole.height());
   };
   // Most confident first; then a part (a box inside a larger kept one) goes, whichever of the
   // two was the more confident.
@@ -178,14 +187,14 @@ std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
   for (int i : order) {
     bool drop = false;
     for (int k : kept) {
-      drop |= boxIou(boxes[k], boxes[i]) > params.max_overlap_iou || partOf(boxes[i], boxes[k]);
+      drop |= boxIou(boxes[k], boxes[i]) > params.max_overlap_iou || partOf(i, k);
     }
     if (!drop) kept.push_back(i);
   }
   std::vector<int> out;
   for (int i : kept) {
     bool part = false;
-    for (int k : kept) part |= k != i && partOf(boxes[i], boxes[k]);
+    for (int k : kept) part |= k != i && partOf(i, k);
     if (!part) out.push_back(i);
   }
   return out;

@@ -34,7 +34,9 @@ struct RobotDetectorParams {
   /// An accepted box whose feet point lies in the lower part of a nearer accepted box (up to this
   /// fraction of its height above its feet: feetInLowerPart; the proposer's
   /// own_body_height_fraction) stays only from min_behind_robot_confidence too, wherever the
-  /// proposer put it: it is that robot's knee or hand, or a robot behind it. 0: no such test.
+  /// proposer put it: it is that robot's knee or hand, or a robot behind it. Above that part, a
+  /// box of at least min_behind_robot_confidence max_inside_fraction inside a larger accepted one
+  /// is a robot behind it, not its part (keptRobotBoxes). 0: neither test.
   double behind_lower_part_fraction = 0.4;
   /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
   /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
@@ -75,7 +77,9 @@ struct RobotDetectorParams {
 /// Which of the boxes RobotNet accepted (`confidence` >= min_confidence) become percepts, most
 /// confident first: a box overlapping a kept one by more than max_overlap_iou is dropped, and a
 /// box lying max_inside_fraction inside a larger kept one is a part of it (hand, arm) and dropped
-/// even when it is the more confident. Indices into `boxes`.
+/// even when it is the more confident, but for one of at least min_behind_robot_confidence whose
+/// lower edge stands more than behind_lower_part_fraction of the larger box's height above that
+/// box's lower edge (a robot behind a near one, whose box reaches round it). Indices into `boxes`.
 std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
                                 const std::vector<float>& confidence,
                                 const RobotDetectorParams& params);
