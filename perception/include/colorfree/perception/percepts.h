@@ -58,7 +58,7 @@ struct RobotProposal {
 };
 
 /// Whether a robot candidate's feet point lies in the lower part of a nearer robot's box: in its
-/// column, at least 0.1 and less than `lower_part_fraction` of its height above its feet, where
+/// column, more than 0.1 and less than `lower_part_fraction` of its height above its feet, where
 /// that robot's knee, crotch or hand would be (a NAO's hands hang at about 0.37 of its height), or
 /// the feet of a robot beside or behind it.
 inline bool feetInLowerPart(const Eigen::Vector2d& feet_px, const RobotProposal& nearer,
