@@ -30,6 +30,10 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.rescale_up = f.getInRange("rescale_up", 0, 4);
   p.rescale_down = f.getInRange("rescale_down", 0, 1);
   p.rescale_min_confidence = f.getInRange("rescale_min_confidence", 0, 1);
+  p.sharpen_sigma_radii = f.getInRange("sharpen_sigma_radii", 0, 2);
+  p.sharpen_amount = f.getInRange("sharpen_amount", 0, 20);
+  p.sharpen_min_radius_px = f.getInRange("sharpen_min_radius_px", 0, 1000);
+  p.sharpen_min_confidence = f.getInRange("sharpen_min_confidence", 0, 1);
   f.finish();
   return p;
 }
@@ -225,6 +229,34 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
       radius_scale[kept[k]] = s;
     }
   }
+  // Rejected kept patches the rescaled look did not take, through the unsharp mask (a soft lens).
+  std::vector<float> sharpened_conf(kept.size(), -1.0f);
+  std::vector<std::size_t> sharpened;  // k
+  for (std::size_t k = 0; k < kept.size() && params_.sharpen_sigma_radii > 0; ++k) {
+    if (ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
+        proposals[kept[k]].radius_px >= params_.sharpen_min_radius_px) {
+      sharpened.push_back(k);
+    }
+  }
+  if (!sharpened.empty()) {
+    const cnn::Shape& in = ball_net_.input();
+    const int count = in.width * in.height;
+    // The ball's radius in patch pixels: the patch is patch_diameters ball diameters wide.
+    const double sigma_px = params_.sharpen_sigma_radii * in.width / (2 * params_.patch_diameters);
+    std::vector<float> inputs(sharpened.size() * count), prob(sharpened.size() * 2);
+    for (std::size_t m = 0; m < sharpened.size(); ++m) {
+      float* v = &inputs[m * count];
+      cnn::extractPatch(image, kept_boxes[sharpened[m]], in.width, in.height,
+                        cnn::PatchNormalization::kUnitRange, v);
+      for (int j = 0; j < count; ++j) v[j] *= 255.0f;  // grey levels: kMinStddev is in them
+      cnn::unsharpMask(v, in.width, in.height, sigma_px, params_.sharpen_amount);
+      cnn::normalizePatch(v, count, ball_net_.net().normalization());
+    }
+    ball_net_.run(inputs.data(), static_cast<int>(sharpened.size()), prob.data());
+    for (std::size_t m = 0; m < sharpened.size(); ++m) {
+      sharpened_conf[sharpened[m]] = prob[2 * m + 1];
+    }
+  }
 
   std::vector<BallPercept> out;
   std::vector<BallDecision> all(proposals.size());
@@ -245,11 +277,15 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
       hits.emplace_back(all[i].ball_confidence, i);
     } else if (rescaled_conf[k] >= 0) {
       hits.emplace_back(rescaled_conf[k], i);
+    } else if (sharpened_conf[k] >= params_.sharpen_min_confidence) {
+      hits.emplace_back(sharpened_conf[k], i);
     }
-    // (SmearedBallNet's answer counts for a patch the rescaled look did not take: one hit per proposal.)
+    all[i].sharpened_confidence = sharpened_conf[k];
+    // (SmearedBallNet's answer counts for a patch neither other look took: one hit per proposal.)
     if (smear[k] >= params_.smeared_min_coherence) {
       all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];
-      if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence && rescaled_conf[k] < 0) {
+      if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence &&
+          rescaled_conf[k] < 0 && sharpened_conf[k] < params_.sharpen_min_confidence) {
         hits.emplace_back(all[i].smeared_confidence, i);
         smeared_centre[i] = smearedBallCentre(image, proposals[i].centre_px, proposals[i].radius_px, along[k],
                                               params_.smeared_centre_reach_radii,

@@ -68,6 +68,10 @@ int probe(int argc, char** argv) {
   env("BP_DOWN", config.ball_detector.rescale_down);
   env("BP_RESCONF", config.ball_detector.rescale_min_confidence);
   env("BP_SMEARCONF", config.ball_detector.smeared_ball_min_confidence);
+  env("BP_SHARP", config.ball_detector.sharpen_sigma_radii);
+  env("BP_SHARPAMT", config.ball_detector.sharpen_amount);
+  env("BP_SHARPCONF", config.ball_detector.sharpen_min_confidence);
+  env("BP_SHARPMINR", config.ball_detector.sharpen_min_radius_px);
   // BP_EXACT=1: each proposal's centre, radius and response also printed in full (hexadecimal).
   const bool exact = std::getenv("BP_EXACT") != nullptr;
   const Pipeline pipeline(config);
@@ -105,6 +109,7 @@ int probe(int argc, char** argv) {
                     (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", d.boost_confidence,
                     d.ball_confidence);
         if (d.smear >= 0) std::printf(" smear=%.2f smeared=%.3f", d.smear, d.smeared_confidence);
+        if (d.sharpened_confidence >= 0) std::printf(" sharp=%.3f", d.sharpened_confidence);
         std::printf("\n");
         // Every bit of the proposal (a speedup must leave them as they were).
         if (exact) {

@@ -277,6 +277,50 @@ TEST(CnnPatch, StandardisesWithSixteenPartialSumsOfRoundedSquares) {
   }
 }
 
+// The unsharp mask: a flat patch stays flat; a blurred step (a soft lens's edge) gets steeper,
+// keeps its mean, and over- and undershoots its two levels, symmetrically; a single bright pixel is
+// v + a (v - G v) exactly where G's weights are known; bad sizes and values are refused.
+TEST(CnnPatch, UnsharpMaskSteepensEdgesAndLeavesFlatPatchesAlone) {
+  std::vector<float> flat(26 * 26, 90.0f);
+  unsharpMask(flat.data(), 26, 26, 2.0, 4.0);
+  for (const float v : flat) EXPECT_NEAR(v, 90.0f, 1e-3f);
+  // A step from 50 to 150 across columns 12 | 13, blurred: a logistic ramp some 6 px wide.
+  std::vector<float> step(26 * 26);
+  for (int y = 0; y < 26; ++y) {
+    for (int x = 0; x < 26; ++x)
+      step[y * 26 + x] = 50.0f + 100.0f / (1.0f + std::exp(-(x - 12.5f) / 1.5f));
+  }
+  std::vector<float> sharp = step;
+  unsharpMask(sharp.data(), 26, 26, 3.0, 2.0);
+  const auto slope = [](const std::vector<float>& v) { return v[10 * 26 + 13] - v[10 * 26 + 12]; };
+  EXPECT_GT(slope(sharp), 1.5f * slope(step));
+  float lo = 1e9f, hi = -1e9f, sum = 0, sum_step = 0;
+  for (int i = 0; i < 26 * 26; ++i) {
+    lo = std::min(lo, sharp[i]);
+    hi = std::max(hi, sharp[i]);
+    sum += sharp[i];
+    sum_step += step[i];
+  }
+  EXPECT_LT(lo, 48.0f);
+  EXPECT_GT(hi, 152.0f);
+  EXPECT_NEAR(lo - 50.0f, 150.0f - hi, 1e-2f);
+  EXPECT_NEAR(sum / (26 * 26), sum_step / (26 * 26), 0.5f);
+  // One bright pixel far from the border: the blur's centre weight is 1 / (sum of the 1-D
+  // weights)^2.
+  std::vector<float> dot(21 * 21, 0.0f);
+  dot[10 * 21 + 10] = 100.0f;
+  unsharpMask(dot.data(), 21, 21, 1.0, 3.0);
+  double w = 0;
+  for (int i = -3; i <= 3; ++i) w += std::exp(-0.5 * i * i);
+  EXPECT_NEAR(dot[10 * 21 + 10], 100.0 + 3.0 * (100.0 - 100.0 / (w * w)), 1e-3);
+  EXPECT_NEAR(dot[10 * 21 + 11], -3.0 * 100.0 * std::exp(-0.5) / (w * w), 1e-3);
+  EXPECT_THROW(unsharpMask(dot.data(), 0, 21, 1.0, 1.0), Error);
+  EXPECT_THROW(unsharpMask(dot.data(), 21, 300, 1.0, 1.0), Error);
+  EXPECT_THROW(unsharpMask(dot.data(), 21, 21, 0.0, 1.0), Error);
+  EXPECT_THROW(unsharpMask(dot.data(), 21, 21, 1.0, -1.0), Error);
+  EXPECT_THROW(unsharpMask(dot.data(), 21, 21, std::nan(""), 1.0), Error);
+}
+
 TEST(CnnClassifier, SinglePatchesAndBatchesGiveTheSameProbabilities) {
   Net net = readDarknetCfg(model("ori_net.cfg"));
   net.initialise(2);

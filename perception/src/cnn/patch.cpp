@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #if defined(__SSE2__)
 #include <immintrin.h>
@@ -69,6 +70,45 @@ void normalizePatch(float* values, int count, PatchNormalization normalization) 
   const float var = std::max(0.0f, total_sq / static_cast<float>(count) - mean * mean);
   const float inv = 1.0f / std::max(std::sqrt(var), kMinStddev);
   for (int j = 0; j < count; ++j) values[j] = (values[j] - mean) * inv;
+}
+
+void unsharpMask(float* values, int width, int height, double sigma_px, double amount) {
+  if (width <= 0 || height <= 0 || width > kMaxPatchSide || height > kMaxPatchSide) {
+    throw Error("unsharpMask: patch size " + std::to_string(width) + "x" + std::to_string(height) +
+                " outside 1..256");
+  }
+  if (!(sigma_px > 0) || !(amount >= 0)) {
+    throw Error("unsharpMask: sigma " + std::to_string(sigma_px) + " px and amount " +
+                std::to_string(amount) + " (need sigma > 0, amount >= 0)");
+  }
+  const int reach = std::max(1, static_cast<int>(std::ceil(3 * sigma_px)));
+  std::vector<float> kernel(2 * reach + 1);
+  float total = 0;
+  for (int i = -reach; i <= reach; ++i) {
+    total += kernel[i + reach] = static_cast<float>(std::exp(-0.5 * i * i / (sigma_px * sigma_px)));
+  }
+  for (float& k : kernel) k /= total;
+  const auto clamp = [](int i, int n) { return std::min(n - 1, std::max(0, i)); };
+  std::vector<float> rows(static_cast<std::size_t>(width) * height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      float s = 0;
+      for (int i = -reach; i <= reach; ++i)
+        s += kernel[i + reach] * values[y * width + clamp(x + i, width)];
+      rows[y * width + x] = s;
+    }
+  }
+  const float a = static_cast<float>(amount);
+  std::vector<float> blurred(rows.size());
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      float s = 0;
+      for (int i = -reach; i <= reach; ++i)
+        s += kernel[i + reach] * rows[clamp(y + i, height) * width + x];
+      blurred[y * width + x] = s;
+    }
+  }
+  for (std::size_t i = 0; i < blurred.size(); ++i) values[i] += a * (values[i] - blurred[i]);
 }
 
 void extractPatch(const GrayView& image, const PatchBox& box, int width, int height,

@@ -44,6 +44,15 @@ struct BallDetectorParams {
   double rescale_up = 1.6;
   double rescale_down = 0.7;
   double rescale_min_confidence = 0.99;
+  /// A kept patch BallNet rejects (and the rescaled look did not take) gets a look through an
+  /// unsharp mask (`cnn::unsharpMask`) of this blur, in ball radii (a soft lens blurs the ball's
+  /// print, which BallNet reads; the mask restores some of it) ... 0: no such look.
+  double sharpen_sigma_radii = 0.2;
+  double sharpen_amount = 4;  ///< ... and strength ...
+  /// ... for proposals of at least this radius: a smaller ball's patch is enlarged to the net's
+  /// input, blurred by the resampling rather than the lens, and sharpening it makes up prints ...
+  double sharpen_min_radius_px = 10;
+  double sharpen_min_confidence = 0.99;  ///< ... and is detected from this BallNet score there.
 
   bool operator==(const BallDetectorParams&) const = default;
   static BallDetectorParams load(const std::string& path);
@@ -87,6 +96,8 @@ struct BallDecision {
   float ball_confidence = -1;      ///< BallNet's "ball" probability; -1 when it did not run
   float smear = -1;                ///< `patchSmear` of a kept proposal BallNet rejected; else -1, or beyond the image
   float smeared_confidence = -1;   ///< SmearedBallNet's "ball" probability; -1 when it did not run
+  /// BallNet's "ball" probability on the sharpened patch; -1 when it did not look
+  float sharpened_confidence = -1;
   bool detected = false;
 };
 
@@ -94,7 +105,8 @@ struct BallDecision {
 /// keeps at most five; BallNet (26×26) decides; a patch it rejects that the camera's motion smeared
 /// (`smeared_min_coherence`) gets a second look by SmearedBallNet (BallNet's shape, trained on such
 /// patches only), and BallNet looks again at it framed larger and smaller (rescale_*: the camera
-/// pose the expected radius came from may be off).
+/// pose the expected radius came from may be off) and, if neither framing takes, sharpened
+/// (sharpen_*: a soft lens).
 /// Nets read from perception/models by default.
 class BallDetector {
  public:

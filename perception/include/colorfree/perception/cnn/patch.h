@@ -31,4 +31,10 @@ void extractPatch(const GrayView& image, const PatchBox& box, int width, int hei
 /// Normalises `count` grey values (0..255) in place.
 void normalizePatch(float* values, int count, PatchNormalization normalization);
 
+/// Unsharp mask in place on a width × height patch (rows top-down): v + amount × (v − G_σ v), with
+/// G_σ a Gaussian blur of standard deviation `sigma_px` (patch pixels; the border repeated). It
+/// undoes part of a soft lens's blur; a flat patch stays as it is. Throws colorfree::Error for an
+/// empty or oversized patch, sigma_px <= 0 or amount < 0.
+void unsharpMask(float* values, int width, int height, double sigma_px, double amount);
+
 }  // namespace colorfree::cnn
