@@ -58,6 +58,7 @@ FieldLineParams FieldLineParams::load(const std::string& path) {
   p.penalty_mark_max_distance_m = f.getInRange("penalty_mark_max_distance_m", 0, 20);
   p.penalty_mark_max_dark_fraction = f.getInRange("penalty_mark_max_dark_fraction", 0, 1);
   p.min_penalty_mark_spots = static_cast<int>(f.getInRange("min_penalty_mark_spots", 1, 100));
+  p.penalty_mark_ball_radii = f.getInRange("penalty_mark_ball_radii", 0, 10);
   f.finish();
   if (p.min_width_factor >= p.max_width_factor) {
     throw Error(path + ": min_width_factor must be below max_width_factor");

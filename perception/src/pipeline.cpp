@@ -1,5 +1,6 @@
 #include "colorfree/perception/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -87,6 +88,19 @@ Pipeline::Pipeline(PipelineConfig config)
 
 namespace {
 
+// A white blob a detected ball explains is no penalty mark: marks centred within `radii` × a
+// ball's image radius of its centre are dropped.
+void dropPenaltyMarksUnderBalls(Frame& frame, double radii) {
+  if (radii <= 0 || !frame.field_lines || !frame.ball_percepts) return;
+  auto& marks = frame.field_lines->features.penalty_marks;
+  std::erase_if(marks, [&](const CircleMarkPercept& m) {
+    return std::any_of(frame.ball_percepts->begin(), frame.ball_percepts->end(),
+                       [&](const BallPercept& b) {
+                         return (m.centre_px - b.centre_px).norm() < radii * b.radius_px;
+                       });
+  });
+}
+
 // Runs `f` and adds its duration to the stage's timing.
 template <typename F>
 void timed(PipelineStats* stats, Stage stage, F&& f) {
@@ -159,6 +173,7 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
       frame.ball_percepts = ball_detector_->run(image, frame.camera, *frame.ball_proposals, &decisions);
       frame.ball_decisions = std::move(decisions);
     });
+    dropPenaltyMarksUnderBalls(frame, config_.field_lines.penalty_mark_ball_radii);
   }
 }
 

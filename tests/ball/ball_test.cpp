@@ -170,6 +170,38 @@ TEST(BallDetection, NothingOnALoneLineCrossing) {
   EXPECT_TRUE(f.balls.empty());
 }
 
+// A ball whose black patches the light lifts to the carpet's gray (as in the real dark-hall NAO
+// frame) is a bright blob with nothing darker inside: the field lines alone take it for a penalty
+// mark; once the ball is detected the pipeline drops that mark.
+TEST(BallDetection, ABallWithGrayPatchesIsNoPenaltyMark) {
+  const CameraModel cam = test::testCamera(22);
+  const test::SyntheticScene scene = carpetOnly(4);
+  static const Pipeline pipeline(PipelineConfig::loadDefault());
+  PipelineConfig keep_config = PipelineConfig::loadDefault();
+  keep_config.field_lines.penalty_mark_ball_radii = 0;
+  const Pipeline keep(keep_config);
+  for (const double d : {1.1, 1.3}) {
+    GrayImage image = test::renderScene(cam, scene);
+    const test::DrawnBall b = test::drawBall(image, cam, {d, 0.1}, 130, scene.carpet);
+    const auto on_ball = [&](const std::vector<CircleMarkPercept>& marks) {
+      return std::count_if(marks.begin(), marks.end(), [&](const CircleMarkPercept& m) {
+        return (m.centre_px - b.centre_px).norm() < b.radius_px;
+      });
+    };
+    const FieldLineResult lines =
+        FieldLineDetector().run(image.view(), cam, IgnoreMask::all(640, 480));
+    ASSERT_EQ(on_ball(lines.features.penalty_marks), 1)
+        << d << ": the field lines alone find no mark on the ball";
+    Frame frame(image.view(), cam);
+    pipeline.process(frame);
+    ASSERT_TRUE(detected(*frame.ball_percepts, b)) << d << describe(*frame.ball_proposals);
+    EXPECT_EQ(on_ball(frame.field_lines->features.penalty_marks), 0) << d;
+    Frame kept(image.view(), cam);
+    keep.process(kept);
+    EXPECT_EQ(on_ball(kept.field_lines->features.penalty_marks), 1) << d;
+  }
+}
+
 // Less than about half a ball in view: a proposal centred outside the image by more than
 // max_centre_outside_radii is not passed on to BallNet, whatever BoostBallNet says of it.
 TEST(BallDetector, ProposalsCentredOutsideTheImageAreNotPassedOn) {

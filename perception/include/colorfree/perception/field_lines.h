@@ -74,6 +74,11 @@ struct FieldLineParams {
   /// min_spot_contrast (a ball's black patches are; a painted cross has none).
   double penalty_mark_max_dark_fraction = 0.08;
   int min_penalty_mark_spots = 4;
+  /// A mark whose image centre lies within this × a detected ball's image radius of the ball's
+  /// centre is the ball (or hidden under it): the pipeline drops it once the ball is detected (a
+  /// ball whose black patches a dim hall's glare lifts to the carpet's gray passes the dark test
+  /// above). 0: never.
+  double penalty_mark_ball_radii = 1.0;
 
   bool operator==(const FieldLineParams&) const = default;
   static FieldLineParams load(const std::string& path);
