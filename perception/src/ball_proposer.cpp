@@ -538,29 +538,6 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
   return {x + (si / sw - half) * cell, y + (sj / sw - half) * cell};
 }
 
-// The median grey level of the looked-at pixels (every 4th pixel of every 4th row); of the whole
-// image when nothing is looked at.
-double frameLight(const GrayView& image, const IgnoreMask& ignore) {
-  std::uint32_t hist[256] = {};
-  std::uint32_t n = 0;
-  for (int pass = 0; pass < 2 && n == 0; ++pass) {
-    for (int y = 2; y < image.height; y += 4) {
-      const std::uint8_t* row = image.row(y);
-      for (int x = 2; x < image.width; x += 4) {
-        if (pass == 0 && !ignore.looked(x, y)) continue;
-        ++hist[row[x]];
-        ++n;
-      }
-    }
-  }
-  std::uint32_t acc = 0;
-  for (int g = 0; g < 256; ++g) {
-    acc += hist[g];
-    if (2 * acc >= n) return g;
-  }
-  return 255;
-}
-
 // Windows (of the high-contrast grid) whose grey-level standard deviation over every 2nd row is at
 // least `min_std`, looked at (centre pixel), grown by one window: row-major, 1 where marked.
 std::vector<std::uint8_t> dimWindows(const GrayView& image, const IgnoreMask& ignore,
@@ -624,9 +601,11 @@ std::vector<std::uint8_t> dimWindows(const GrayView& image, const IgnoreMask& ig
 }  // namespace
 
 std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraModel& camera,
-                                            const IgnoreMask& ignore, const ContrastRegions& regions,
+                                            const IgnoreMask& ignore,
+                                            const ContrastRegions& regions,
                                             const std::vector<RobotPercept>* robots,
-                                            std::optional<double> pixel_noise_gray) const {
+                                            std::optional<double> pixel_noise_gray,
+                                            std::optional<double> light_gray) const {
   const BallProposerParams& p = params_;
   if (image.empty()) throw Error("ball proposals: empty image");
   if (ignore.width != image.width || ignore.height != image.height) {
@@ -641,7 +620,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   double min_response = p.min_response;
   std::vector<std::uint8_t> dim;
   if (p.light_response_fraction > 0 || p.light_contrast_fraction > 0) {
-    const double light = frameLight(image, ignore);
+    const double light = light_gray ? *light_gray : frameLightGray(image, ignore);
     if (p.light_response_fraction > 0) min_response = std::min(min_response, p.light_response_fraction * light);
     const double min_std = p.light_contrast_fraction * light;
     if (p.light_contrast_fraction > 0 && min_std < p.light_max_window_contrast) {

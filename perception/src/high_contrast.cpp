@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "colorfree/perception/error.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/param_file.h"
 
 namespace colorfree {
@@ -17,6 +18,8 @@ HighContrastParams HighContrastParams::load(const std::string& path) {
   HighContrastParams p;
   p.window_px = static_cast<int>(f.getInRange("window_px", 4, 64));
   p.min_contrast = f.getInRange("min_contrast", 0, 128);
+  p.light_contrast_fraction = f.getInRange("light_contrast_fraction", 0, 1);
+  p.light_min_contrast = f.getInRange("light_min_contrast", 0, 128);
   p.row_step_px = static_cast<int>(f.getInRange("row_step_px", 1, 8));
   p.dilation_windows = static_cast<int>(f.getInRange("dilation_windows", 0, 8));
   f.finish();
@@ -77,7 +80,8 @@ OtsuResult otsu(const std::uint32_t* hist) {
 
 HighContrastDetector::HighContrastDetector(HighContrastParams params) : params_(params) {}
 
-ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMask& ignore) const {
+ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMask& ignore,
+                                          std::optional<double> light_gray) const {
   if (ignore.width != image.width || ignore.height != image.height) {
     throw Error("high-contrast regions: ignore mask does not match the image size");
   }
@@ -91,7 +95,13 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
   out.mask.assign(n, 0);
   out.contrast.assign(n, 0.f);
   const int used_width = out.columns * s;
-  const double min_var = params_.min_contrast * params_.min_contrast;
+  double min_contrast = params_.min_contrast;
+  if (params_.light_contrast_fraction > 0) {
+    const double relative = params_.light_contrast_fraction *
+                            (light_gray ? *light_gray : frameLightGray(image, ignore));
+    min_contrast = std::min(min_contrast, std::max(params_.light_min_contrast, relative));
+  }
+  const double min_var = min_contrast * min_contrast;
   const int step = params_.row_step_px;
   const double count = static_cast<double>(s) * ((s + step - 1) / step);
 
@@ -152,7 +162,7 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
       const OtsuResult o = otsuBinned(bin_count, value_sum, kBins);
       const std::size_t i = static_cast<std::size_t>(r) * out.columns + c;
       out.contrast[i] = static_cast<float>(o.between_std);
-      if (o.between_std >= params_.min_contrast) out.seeds[i] = 1;
+      if (o.between_std >= min_contrast) out.seeds[i] = 1;
     }
   }
 

@@ -36,4 +36,25 @@ double pixelNoiseGray(const GrayView& image, const IgnoreMask& ignore, int row_s
   return any ? noise.sigma() / std::sqrt(2.0) : 0;
 }
 
+double frameLightGray(const GrayView& image, const IgnoreMask& ignore) {
+  std::uint32_t hist[256] = {};
+  std::uint32_t n = 0;
+  for (int pass = 0; pass < 2 && n == 0; ++pass) {
+    for (int y = 2; y < image.height; y += 4) {
+      const std::uint8_t* row = image.row(y);
+      for (int x = 2; x < image.width; x += 4) {
+        if (pass == 0 && !ignore.looked(x, y)) continue;
+        ++hist[row[x]];
+        ++n;
+      }
+    }
+  }
+  std::uint32_t acc = 0;
+  for (int g = 0; g < 256; ++g) {
+    acc += hist[g];
+    if (2 * acc >= n) return g;
+  }
+  return 255;
+}
+
 }  // namespace colorfree

@@ -135,9 +135,11 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
     frame.ignore_mask =
         IgnoreMask::combine(*frame.field_boundary, *frame.body_contour, image.width, image.height);
     frame.pixel_noise_gray = pixelNoiseGray(image, *frame.ignore_mask);
+    frame.light_gray = frameLightGray(image, *frame.ignore_mask);
   });
-  timed(stats, Stage::kHighContrast,
-        [&] { frame.contrast_regions = high_contrast_.run(image, *frame.ignore_mask); });
+  timed(stats, Stage::kHighContrast, [&] {
+    frame.contrast_regions = high_contrast_.run(image, *frame.ignore_mask, frame.light_gray);
+  });
   timed(stats, Stage::kFieldLines, [&] {
     frame.field_lines = field_lines_.run(image, frame.camera, *frame.ignore_mask, config_.keep_rejected);
   });
@@ -164,9 +166,10 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
   // The ball proposals also scan the regions in front of the detected robots' feet.
   if (ball_detector_) {
     timed(stats, Stage::kBallProposals, [&] {
-      frame.ball_proposals = ball_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions,
-                                                frame.robot_percepts ? &*frame.robot_percepts : nullptr,
-                                                frame.pixel_noise_gray);
+      frame.ball_proposals =
+          ball_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions,
+                             frame.robot_percepts ? &*frame.robot_percepts : nullptr,
+                             frame.pixel_noise_gray, frame.light_gray);
     });
     timed(stats, Stage::kBallDetector, [&] {
       std::vector<BallDecision> decisions;

@@ -262,10 +262,10 @@ TEST(BallProposer, WorksWithoutAndWithRobotsAndIsCapped) {
 }
 
 // A dark hall seen through a soft lens: carpet at 30 grey levels, the ball's white at 72, the
-// frame blurred (two 3×3 box passes). The high-contrast stage leaves the ball's windows unmarked
-// (their contrast is below its absolute 22 grey levels); the proposer's threshold that follows the
-// frame's light scans them. Without it (light_contrast_fraction 0) the ball is not proposed; blank
-// dark carpet gives no proposal either way.
+// frame blurred (two 3×3 box passes). The high-contrast stage's absolute threshold (22 grey levels)
+// leaves the ball's windows unmarked; the proposer's threshold that follows the frame's light scans
+// them, and so does the high-contrast stage's own (its light_contrast_fraction). With both off the
+// ball is not proposed; blank dark carpet gives no proposal either way.
 GrayImage softened(const GrayImage& in) {
   GrayImage a = in, b = in;
   for (int pass = 0; pass < 2; ++pass) {
@@ -301,10 +301,15 @@ test::SyntheticScene darkCarpet(std::uint64_t seed) {
   return s;
 }
 
-// `noise`: the frame's pixel noise as a caller (the pipeline) hands it over; absent: the proposer's own estimate.
-std::vector<BallProposal> proposeOnly(const GrayImage& image, const CameraModel& cam, const BallProposerParams& p,
-                                      std::optional<double> noise = std::nullopt) {
-  const PipelineConfig config = PipelineConfig::loadDefault();
+// `noise`: the frame's pixel noise as a caller (the pipeline) hands it over; absent: the proposer's
+// own estimate. `light_contrast`: the high-contrast stage's light-relative threshold on (shipped)
+// or off.
+std::vector<BallProposal> proposeOnly(const GrayImage& image, const CameraModel& cam,
+                                      const BallProposerParams& p,
+                                      std::optional<double> noise = std::nullopt,
+                                      bool light_contrast = true) {
+  PipelineConfig config = PipelineConfig::loadDefault();
+  if (!light_contrast) config.high_contrast.light_contrast_fraction = 0;
   const IgnoreMask ignore = IgnoreMask::all(image.width(), image.height());
   const ContrastRegions regions = HighContrastDetector(config.high_contrast).run(image.view(), ignore);
   return BallProposer(p).run(image.view(), cam, ignore, regions, nullptr, noise);
@@ -322,7 +327,10 @@ TEST(BallProposer, LowContrastSoftBallInADarkHall) {
                                        << "), r=" << b.radius_px << describe(props);
     BallProposerParams absolute = shipped;
     absolute.light_contrast_fraction = 0;
-    EXPECT_LT(matchIndex(proposeOnly(image, cam, absolute), b), 0) << "the absolute thresholds find it too at " << d << " m";
+    EXPECT_LT(matchIndex(proposeOnly(image, cam, absolute, std::nullopt, false), b), 0)
+        << "the absolute thresholds find it too at " << d << " m";
+    // The high-contrast stage's own light-relative threshold marks its windows too.
+    EXPECT_GE(matchIndex(proposeOnly(image, cam, absolute), b), 0) << d << " m";
   }
 }
 

@@ -111,6 +111,38 @@ TEST(HighContrast, IgnoredWindowsAreNotLookedAt) {
   EXPECT_THROW(HighContrastDetector().run(image.view(), mask), Error);
 }
 
+// In a dark frame the threshold follows the light: on a carpet of 40 (threshold 0.3 × 40 = 12) a
+// window split 40 | 66 (contrast 13) is marked, and 40 | 60 (contrast 10) is not; with the
+// absolute threshold only, neither. On a carpet of 100 (0.3 × 100 = 30: the absolute 22 holds) a
+// window of contrast 20 is not marked, one of 25 is.
+TEST(HighContrast, DarkFrameThresholdFollowsTheLight) {
+  GrayImage image(640, 480, 40);
+  for (int y = 160; y < 176; ++y) {
+    for (int x = 160; x < 168; ++x) image.at(x, y) = 60;  // d = 20 → contrast 10
+    for (int x = 320; x < 328; ++x) image.at(x, y) = 66;  // d = 26 → contrast 13
+  }
+  const HighContrastParams shipped = HighContrastParams::loadDefault();
+  ASSERT_DOUBLE_EQ(shipped.light_contrast_fraction, 0.3);
+  const ContrastRegions r =
+      HighContrastDetector(shipped).run(image.view(), IgnoreMask::all(640, 480));
+  EXPECT_FALSE(r.seeds[10 * r.columns + 10]);
+  EXPECT_TRUE(r.seeds[10 * r.columns + 20]);
+  EXPECT_EQ(std::count(r.seeds.begin(), r.seeds.end(), 1), 1);
+  HighContrastParams absolute = shipped;
+  absolute.light_contrast_fraction = 0;
+  EXPECT_EQ(
+      HighContrastDetector(absolute).run(image.view(), IgnoreMask::all(640, 480)).markedCount(), 0);
+  GrayImage bright(640, 480, 100);
+  for (int y = 160; y < 176; ++y) {
+    for (int x = 160; x < 168; ++x) bright.at(x, y) = 140;  // contrast 20
+    for (int x = 320; x < 328; ++x) bright.at(x, y) = 150;  // contrast 25
+  }
+  const ContrastRegions b =
+      HighContrastDetector(shipped).run(bright.view(), IgnoreMask::all(640, 480));
+  EXPECT_FALSE(b.seeds[10 * b.columns + 10]);
+  EXPECT_TRUE(b.seeds[10 * b.columns + 20]);
+}
+
 TEST(HighContrast, ContrastThresholdDecides) {
   // Two halves of a window differing by d: between-class std = d / 2.
   GrayImage image(640, 480, 100);
@@ -146,6 +178,22 @@ ContrastRegions referenceContrast(const GrayView& image, const IgnoreMask& ignor
   out.seeds.assign(n, 0);
   out.mask.assign(n, 0);
   out.contrast.assign(n, 0.f);
+  // The light: the median of every 4th pixel of every 4th row, looked-at ones (all if none are).
+  double min_contrast = p.min_contrast;
+  if (p.light_contrast_fraction > 0) {
+    std::vector<int> looked, every;
+    for (int y = 2; y < image.height; y += 4) {
+      for (int x = 2; x < image.width; x += 4) {
+        every.push_back(image.at(x, y));
+        if (ignore.looked(x, y)) looked.push_back(image.at(x, y));
+      }
+    }
+    std::vector<int>& v = looked.empty() ? every : looked;
+    std::sort(v.begin(), v.end());
+    const double light = v[(v.size() - 1) / 2];
+    min_contrast =
+        std::min(p.min_contrast, std::max(p.light_min_contrast, p.light_contrast_fraction * light));
+  }
   for (int r = 0; r < out.rows; ++r) {
     for (int c = 0; c < out.columns; ++c) {
       if (!ignore.looked(c * s + s / 2, r * s + s / 2)) continue;
@@ -156,12 +204,12 @@ ContrastRegions referenceContrast(const GrayView& image, const IgnoreMask& ignor
       double sum = 0, sq = 0;
       for (int v : samples) sum += v, sq += v * v;
       const double mean = sum / samples.size();
-      if (sq / samples.size() - mean * mean < p.min_contrast * p.min_contrast) continue;
+      if (sq / samples.size() - mean * mean < min_contrast * min_contrast) continue;
       std::uint32_t count[32] = {}, value_sum[32] = {};
       for (int v : samples) ++count[v / 8], value_sum[v / 8] += v;
       const OtsuResult o = otsuBinned(count, value_sum, 32);
       out.contrast[r * out.columns + c] = static_cast<float>(o.between_std);
-      out.seeds[r * out.columns + c] = o.between_std >= p.min_contrast;
+      out.seeds[r * out.columns + c] = o.between_std >= min_contrast;
     }
   }
   const int d = p.dilation_windows;
@@ -241,6 +289,13 @@ TEST(HighContrast, SameAsTheStraightforwardDetector) {
     scene.seed = 20 + i;
     images.emplace_back("field " + std::to_string(i), test::renderScene(test::testCamera(18 + 4 * i), scene));
   }
+  {
+    // A dark hall: the light-relative threshold is below the absolute one.
+    test::SyntheticScene dark = test::sceneFromField(FieldDimensions{}, {-1.0, 0.2, 0.3});
+    dark.carpet = 30, dark.paint = 75, dark.background = 45, dark.texture = 3, dark.pixel_noise = 2,
+    dark.seed = 9;
+    images.emplace_back("dark field", test::renderScene(test::testCamera(22), dark));
+  }
   GrayImage blobs = test::noiseImage(640, 480, 90, 20, 7);
   for (int k = 0; k < 12; ++k) drawBlob(blobs, 30 + 50 * k, 40 + 35 * k, 6 + k);
   images.emplace_back("blobs", std::move(blobs));
@@ -249,8 +304,10 @@ TEST(HighContrast, SameAsTheStraightforwardDetector) {
     cut.top_y[x] = 60 + x / 8;
     cut.bottom_y[x] = x > 200 && x < 420 ? 400 : 480;
   }
-  std::vector<HighContrastParams> params(5);
+  std::vector<HighContrastParams> params(6);
   params[1].row_step_px = 1;
+  params[1].light_contrast_fraction = 0;
+  params[5].light_contrast_fraction = 0.6, params[5].light_min_contrast = 12;
   params[2].window_px = 20, params[2].row_step_px = 3, params[2].dilation_windows = 2;
   params[3].window_px = 13, params[3].min_contrast = 10, params[3].dilation_windows = 0;
   params[4].window_px = 64, params[4].row_step_px = 1, params[4].min_contrast = 5;

@@ -113,13 +113,15 @@ struct BallProposerParams {
 class BallProposer {
  public:
   explicit BallProposer(BallProposerParams params = {});
-  /// `robots` may be null (no robot detector in the pipeline). `pixel_noise_gray`: the frame's
-  /// pixelNoiseGray(image, ignore) when the caller has it (the pipeline's Frame does); estimated
-  /// here when absent. Throws colorfree::Error when the inputs do not match the image size.
+  /// `robots` may be null (no robot detector in the pipeline). `pixel_noise_gray` and
+  /// `light_gray`: the frame's pixelNoiseGray(image, ignore) and frameLightGray(image, ignore) when
+  /// the caller has them (the pipeline's Frame does); estimated here when absent. Throws
+  /// colorfree::Error when the inputs do not match the image size.
   std::vector<BallProposal> run(const GrayView& image, const CameraModel& camera,
                                 const IgnoreMask& ignore, const ContrastRegions& regions,
                                 const std::vector<RobotPercept>* robots = nullptr,
-                                std::optional<double> pixel_noise_gray = std::nullopt) const;
+                                std::optional<double> pixel_noise_gray = std::nullopt,
+                                std::optional<double> light_gray = std::nullopt) const;
   const BallProposerParams& params() const { return params_; }
 
  private:

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,12 @@ struct HighContrastParams {
   /// sqrt(w0 · w1) · (mean1 − mean0), in gray levels. It is at most the window's standard
   /// deviation, so windows below it are skipped before their histogram is built.
   double min_contrast = 22;
+  /// ... or this × the frame's light (`frameLightGray`) where that is lower: in a dark hall or
+  /// behind a soft lens a robot's or a ball's edges fall under the absolute value (in a frame whose
+  /// median gray is above min_contrast / this nothing changes). 0: the absolute value only.
+  double light_contrast_fraction = 0.3;
+  /// ... but never below this (gray levels): a black or a flat frame marks nothing.
+  double light_min_contrast = 8;
   /// A window counts as looked at when its centre pixel is outside the ignored regions.
   int row_step_px = 2;        ///< a window's statistics and histogram use every this-th row
   int dilation_windows = 1;  ///< the marked set is dilated by this many windows in every direction
@@ -54,7 +61,10 @@ struct ContrastRegions {
 class HighContrastDetector {
  public:
   explicit HighContrastDetector(HighContrastParams params = {});
-  ContrastRegions run(const GrayView& image, const IgnoreMask& ignore) const;
+  /// `light_gray`: the frame's frameLightGray(image, ignore) when the caller has it (the pipeline's
+  /// Frame does); estimated here when absent and light_contrast_fraction asks for it.
+  ContrastRegions run(const GrayView& image, const IgnoreMask& ignore,
+                      std::optional<double> light_gray = std::nullopt) const;
   const HighContrastParams& params() const { return params_; }
 
  private:

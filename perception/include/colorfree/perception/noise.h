@@ -29,4 +29,8 @@ class DifferenceNoise {
 double pixelNoiseGray(const GrayView& image, const IgnoreMask& ignore, int row_step = 16,
                       int column_step = 8);
 
+/// A frame's light (gray levels): the median of the looked-at pixels (every 4th pixel of every 4th
+/// row); of the whole image when nothing is looked at.
+double frameLightGray(const GrayView& image, const IgnoreMask& ignore);
+
 }  // namespace colorfree

@@ -32,6 +32,9 @@ struct Frame {
   /// The frame's pixel noise over the looked-at area (pixelNoiseGray, gray levels), estimated once
   /// with the ignore mask; the robot and ball proposers' thresholds follow it.
   std::optional<double> pixel_noise_gray;
+  /// The frame's light (frameLightGray, gray levels), estimated once with the ignore mask; the
+  /// high-contrast stage's and the ball proposer's thresholds follow it.
+  std::optional<double> light_gray;
   std::optional<ContrastRegions> contrast_regions;
   std::optional<FieldLineResult> field_lines;
   /// The robot proposals RobotNet classified: the proposer's, then the held-back ones it freed.
