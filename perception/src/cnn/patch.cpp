@@ -93,8 +93,9 @@ void unsharpMask(float* values, int width, int height, double sigma_px, double a
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       float s = 0;
-      for (int i = -reach; i <= reach; ++i)
+      for (int i = -reach; i <= reach; ++i) {
         s += kernel[i + reach] * values[y * width + clamp(x + i, width)];
+      }
       rows[y * width + x] = s;
     }
   }
@@ -103,8 +104,9 @@ void unsharpMask(float* values, int width, int height, double sigma_px, double a
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       float s = 0;
-      for (int i = -reach; i <= reach; ++i)
+      for (int i = -reach; i <= reach; ++i) {
         s += kernel[i + reach] * rows[clamp(y + i, height) * width + x];
+      }
       blurred[y * width + x] = s;
     }
   }
