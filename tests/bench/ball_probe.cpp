@@ -72,6 +72,7 @@ int probe(int argc, char** argv) {
   env("BP_SHARPAMT", config.ball_detector.sharpen_amount);
   env("BP_SHARPCONF", config.ball_detector.sharpen_min_confidence);
   env("BP_SHARPMINR", config.ball_detector.sharpen_min_radius_px);
+  env("HC_LIGHT", config.high_contrast.light_contrast_fraction);
   // BP_EXACT=1: each proposal's centre, radius and response also printed in full (hexadecimal).
   const bool exact = std::getenv("BP_EXACT") != nullptr;
   const Pipeline pipeline(config);

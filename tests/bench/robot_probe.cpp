@@ -88,6 +88,7 @@ int probe(int argc, char** argv) {
   env("RP_KNEELIT", rpp.knee_min_lit_height_fraction);
   env("RP_KNEEX", rpp.max_knee_proposals);
   env("RP_BOXW", rpp.box_width_factor);
+  env("HC_LIGHT", config.high_contrast.light_contrast_fraction);
   // RP_MODELS=DIR: the nets from DIR (a retrained RobotNet) instead of perception/models.
   if (const char* models = std::getenv("RP_MODELS")) config.model_dir = models;
   // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
