@@ -590,15 +590,17 @@ GrayImage defocused(const GrayImage& in, double sigma) {
   const int reach = static_cast<int>(std::ceil(3 * sigma));
   std::vector<double> k(2 * reach + 1);
   double total = 0;
-  for (int i = -reach; i <= reach; ++i)
+  for (int i = -reach; i <= reach; ++i) {
     total += k[i + reach] = std::exp(-0.5 * i * i / (sigma * sigma));
+  }
   const int w = in.width(), h = in.height();
   std::vector<double> rows(static_cast<std::size_t>(w) * h);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       double s = 0;
-      for (int i = -reach; i <= reach; ++i)
+      for (int i = -reach; i <= reach; ++i) {
         s += k[i + reach] * in.view().at(std::clamp(x + i, 0, w - 1), y);
+      }
       rows[y * w + x] = s / total;
     }
   }
@@ -606,8 +608,9 @@ GrayImage defocused(const GrayImage& in, double sigma) {
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       double s = 0;
-      for (int i = -reach; i <= reach; ++i)
+      for (int i = -reach; i <= reach; ++i) {
         s += k[i + reach] * rows[std::clamp(y + i, 0, h - 1) * w + x];
+      }
       out.at(x, y) = static_cast<std::uint8_t>(std::clamp(std::lround(s / total), 0L, 255L));
     }
   }
