@@ -292,7 +292,11 @@ TEST(HighContrast, SameAsTheStraightforwardDetector) {
   {
     // A dark hall: the light-relative threshold is below the absolute one.
     test::SyntheticScene dark = test::sceneFromField(FieldDimensions{}, {-1.0, 0.2, 0.3});
-    dark.carpet = 30, dark.paint = 75, dark.background = 45, dark.texture = 3, dark.pixel_noise = 2,
+    dark.carpet = 30;
+    dark.paint = 75;
+    dark.background = 45;
+    dark.texture = 3;
+    dark.pixel_noise = 2;
     dark.seed = 9;
     images.emplace_back("dark field", test::renderScene(test::testCamera(22), dark));
   }
