@@ -295,8 +295,9 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     std::vector<int> standing;
     for (int i : order) {
       bool behind = false;
-      for (int k : standing)
+      for (int k : standing) {
         behind |= feetInLowerPart(seen[i].feet_px, seen[k], params_.behind_lower_part_fraction);
+      }
       if (behind && accepted[i] < params_.min_behind_robot_confidence) {
         accepted[i] = 0;
       } else {

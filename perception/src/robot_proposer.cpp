@@ -398,8 +398,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
             const int side =
                 static_cast<int>(std::lround(p.beside_width_factor * *h * width_per_height));
             for (const int xs : {x - side, x + side}) {
-              if (side > 0 && xs >= 0 && xs < image.width && ignore.bottom_y[xs] > y_hi &&
-                  ignore.top_y[xs] <= y_hi) {
+              if (side > 0 && xs >= 0 && xs < image.width && ignore.looked(xs, y_hi)) {
                 carpet = std::min(carpet, static_cast<double>(image.row(y_hi)[xs]));
               }
             }
