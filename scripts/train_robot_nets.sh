@@ -1,9 +1,9 @@
 #!/bin/sh
-# Regenerates robot_net, ori_boost_net and ori_net .weights (into perception/models unless told)
+# Regenerates robot_net, robot_feet_net, ori_boost_net and ori_net .weights (into perception/models unless told)
 # with the shared active-learning loop (`colorfree learn`, paper 3.2) from the training scenarios
 # in scenes/train only (never the evaluation scenes); held-out accuracy from scenes/train/*holdout*.
 # Deterministic: same code, same weights, byte for byte. The three nets are independent; they can
-# run in parallel (the script runs them one after the other).
+# run in parallel (the script runs them one after the other; robot_feet_net reads no other net).
 # Usage: scripts/train_robot_nets.sh [build dir] [dataset dir] [models dir]
 set -eu
 BUILD=${1:-build}
@@ -41,3 +41,13 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
   --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
   --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
   --dataset "$DATA/robot"
+# RobotFeetNet: whether an accepted box's feet row is right (within 0.05 of the robot's height),
+# too high or too low (0.1-0.45): the real proposer's boxes on robots and boxes about every robot's
+# feet moved by 0, +-0.15 and +-0.3 of its height, from RobotNet's training scenes (README robot21).
+"$CF" learn robot_feet --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
+  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
+  $S/robot_far_train.yaml $S/robot_far2_train.yaml $S/robot_near_side_train.yaml \
+  $S/robot_near_topcut_train.yaml $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml \
+  --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
+  --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
+  --dataset "$DATA/robot_feet"

@@ -71,6 +71,21 @@ std::string robotTruthText(const RobotInImage& r) {
   return text;
 }
 
+// The box the proposer draws about a feet point (robot_proposer.yaml's box geometry); nullopt
+// where no robot can stand.
+std::optional<PixelBox> proposerBox(const CameraModel& camera, const RobotProposerParams& pp,
+                                    const FieldDimensions& dims, const Eigen::Vector2d& feet) {
+  const auto h = camera.robotHeightPx(feet, dims.robot_height_m);
+  if (!h) return std::nullopt;
+  const double w = pp.box_width_factor * *h * dims.robot_width_m / dims.robot_height_m;
+  PixelBox b;
+  b.x0 = feet.x() - w / 2;
+  b.x1 = feet.x() + w / 2;
+  b.y1 = feet.y() + pp.box_below_feet_fraction * *h;
+  b.y0 = b.y1 - pp.box_height_factor * *h;
+  return b;
+}
+
 }  // namespace
 
 RobotKind::RobotKind(RobotNetChoice which, PipelineConfig pipeline, ScoringParams scoring,
@@ -87,6 +102,8 @@ std::string RobotKind::name() const {
   switch (which_) {
     case RobotNetChoice::kRobotNet:
       return "robot";
+    case RobotNetChoice::kFeetNet:
+      return "robot_feet";
     case RobotNetChoice::kOriBoostNet:
       return "ori_boost";
     case RobotNetChoice::kOriNet:
@@ -99,6 +116,8 @@ std::vector<std::string> RobotKind::classNames() const {
   switch (which_) {
     case RobotNetChoice::kRobotNet:
       return {"none", "robot"};
+    case RobotNetChoice::kFeetNet:
+      return {"feet_right", "feet_lower", "feet_higher"};
     case RobotNetChoice::kOriBoostNet:
       return {"unusable", "usable"};
     case RobotNetChoice::kOriNet:
@@ -116,12 +135,56 @@ std::vector<std::string> RobotKind::netStems() const {
   switch (which_) {
     case RobotNetChoice::kRobotNet:
       return {"robot_net"};
+    case RobotNetChoice::kFeetNet:
+      return {"robot_feet_net"};
     case RobotNetChoice::kOriBoostNet:
       return {"ori_boost_net"};
     case RobotNetChoice::kOriNet:
       break;
   }
   return {"ori_net"};
+}
+
+std::optional<Candidate> RobotKind::feetCandidate(const CameraModel& camera,
+                                                  const FrameTruth& truth, const PixelBox& box,
+                                                  const Eigen::Vector2d& feet_px,
+                                                  const char* what) const {
+  // The robot the box stands on: the in-view robot whose feet lie nearest its feet point, in its
+  // column (within 0.35 of the robot's width) and within feet_off_max_fraction of its height.
+  const FieldDimensions& dims = config_.field;
+  const RobotInImage* best = nullptr;
+  double best_cost = 1e9, best_off = 0;
+  for (const RobotInImage& r : truth.robots) {
+    if (!r.in_view) continue;
+    const auto h = camera.robotHeightPx(r.ground_px, dims.robot_height_m);
+    if (!h) continue;
+    const double w = *h * dims.robot_width_m / dims.robot_height_m;
+    const double dx = std::abs(r.ground_px.x() - feet_px.x()) / w;
+    const double off = (r.ground_px.y() - feet_px.y()) / *h;  // > 0: the true feet are lower
+    if (dx > 0.35 || std::abs(off) > rules_.feet_off_max_fraction) continue;
+    const double cost = dx + std::abs(off);
+    if (cost < best_cost) {
+      best_cost = cost;
+      best = &r;
+      best_off = off;
+    }
+  }
+  if (!best || !best->should_detect) return std::nullopt;  // none, or a robot too hidden to ask
+  Candidate c;
+  const double a = std::abs(best_off);
+  if (a <= rules_.feet_right_max_fraction) {
+    c.label = 0;
+  } else if (a >= rules_.feet_off_min_fraction) {
+    c.label = best_off > 0 ? 1 : 2;
+  } else {
+    return std::nullopt;
+  }
+  c.box = patchBox(box);
+  c.key = boxKey(what, box);
+  char text[192];
+  std::snprintf(text, sizeof text, "%s feet_off=%.3f", robotTruthText(*best).c_str(), best_off);
+  c.truth = text;
+  return c;
 }
 
 std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const CameraModel& camera,
@@ -131,6 +194,12 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
   const RobotProposals props =
       proposer_.run(image.view(), camera, *frame.ignore_mask, *frame.contrast_regions);
   std::vector<Candidate> out;
+  if (which_ == RobotNetChoice::kFeetNet) {
+    for (const RobotProposal& p : props.proposals) {
+      if (auto c = feetCandidate(camera, truth, p.box, p.feet_px, "p")) out.push_back(*c);
+    }
+    return out;
+  }
   for (const RobotProposal& p : props.proposals) {
     const auto feet = feetInField(camera, truth.observer, p.feet_px);
     int best = -1;
@@ -242,19 +311,29 @@ std::vector<Candidate> RobotKind::truthSamples(const GrayImage& /*image*/,
                                                const CameraModel& camera,
                                                const FrameTruth& truth) const {
   std::vector<Candidate> out;
-  if (which_ != RobotNetChoice::kRobotNet) return out;
   const RobotProposerParams& pp = config_.robot_proposer;
   const FieldDimensions& dims = config_.field;
+  if (which_ == RobotNetChoice::kFeetNet) {
+    // Boxes about each demanded robot's feet moved up and down by fixed fractions of its height.
+    for (const RobotInImage& r : truth.robots) {
+      if (!r.in_view || !r.should_detect) continue;
+      const auto h = camera.robotHeightPx(r.ground_px, dims.robot_height_m);
+      if (!h) continue;
+      for (const double s : {0.0, -0.15, 0.15, -0.3, 0.3}) {
+        const Eigen::Vector2d feet = r.ground_px + Eigen::Vector2d(0, s * *h);
+        const auto b = proposerBox(camera, pp, dims, feet);
+        if (!b) continue;
+        if (auto c = feetCandidate(camera, truth, *b, feet, "t")) out.push_back(*c);
+      }
+    }
+    return out;
+  }
+  if (which_ != RobotNetChoice::kRobotNet) return out;
   for (const RobotInImage& r : truth.robots) {
     if (!r.in_view || !r.should_detect) continue;
-    const auto h = camera.robotHeightPx(r.ground_px, dims.robot_height_m);
-    if (!h) continue;
-    const double w = pp.box_width_factor * *h * dims.robot_width_m / dims.robot_height_m;
-    PixelBox b;
-    b.x0 = r.ground_px.x() - w / 2;
-    b.x1 = r.ground_px.x() + w / 2;
-    b.y1 = r.ground_px.y() + pp.box_below_feet_fraction * *h;
-    b.y0 = b.y1 - pp.box_height_factor * *h;
+    const auto b0 = proposerBox(camera, pp, dims, r.ground_px);
+    if (!b0) continue;
+    const PixelBox& b = *b0;
     Candidate c;
     c.box = patchBox(b);
     c.label = 1;

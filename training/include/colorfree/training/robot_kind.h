@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/perception/pipeline.h"
@@ -14,7 +15,8 @@ namespace colorfree::training {
 enum class RobotNetChoice {
   kRobotNet,     ///< RobotNet: the real RobotProposer's boxes, robot or none
   kOriBoostNet,  ///< OriBoostNet: the lines generator's regions, usable line or not
-  kOriNet,       ///< OriNet: usable regions, front, back or side (facing the observer's left or right)
+  kOriNet,   ///< OriNet: usable regions, front, back or side (facing the observer's left or right)
+  kFeetNet,  ///< RobotFeetNet: a box on a robot, its feet row right, too high or too low
 };
 
 /// Labelling rules for the robot kinds (angles between a line and the true heading's axis or its
@@ -25,6 +27,12 @@ struct RobotLabelRules {
   double unusable_min_deg = 20;  ///< ... this far from both, unusable; in between left out
   double classed_max_deg = 9;    ///< OriNet: regions whose line is this close get a class
   int random_negatives = 2;      ///< RobotNet: robot-sized boxes at random ground points per frame
+  /// RobotFeetNet: a box whose feet row lies within this fraction of the robot's height of the
+  /// true feet is right; from feet_off_min_fraction up to feet_off_max_fraction it is too high or
+  /// too low; in between, and farther, left out.
+  double feet_right_max_fraction = 0.05;
+  double feet_off_min_fraction = 0.1;
+  double feet_off_max_fraction = 0.45;
 };
 
 /// The robot-specific part of the loop. Proposals come from the real RobotProposer (after the
@@ -55,6 +63,12 @@ class RobotKind : public ObjectKind {
                                       const FrameTruth& truth) const override;
 
  private:
+  /// RobotFeetNet's sample for a box about feet_px: labelled from the robot it stands on, none
+  /// when it stands on no demanded robot or between the label rules' bounds.
+  std::optional<Candidate> feetCandidate(const CameraModel& camera, const FrameTruth& truth,
+                                         const PixelBox& box, const Eigen::Vector2d& feet_px,
+                                         const char* what) const;
+
   RobotNetChoice which_;
   PipelineConfig config_;
   Pipeline pipeline_;  ///< the early stages only (robot and ball stages off)
