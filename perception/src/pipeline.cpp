@@ -79,7 +79,8 @@ Pipeline::Pipeline(PipelineConfig config)
     auto net = [&](const char* stem) {
       return cnn::Classifier::load(dir + "/" + stem + ".cfg", dir + "/" + stem + ".weights");
     };
-    robot_detector_.emplace(config_.robot_detector, net("robot_net"), config_.field);
+    robot_detector_.emplace(config_.robot_detector, net("robot_net"), config_.field,
+                            net("robot_feet_net"));
     robot_orientation_.emplace(config_.robot_orientation, config_.field, net("ori_boost_net"),
                                net("ori_net"));
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <numeric>
 
+#include "colorfree/perception/cnn/patch.h"
 #include "colorfree/perception/cnn/shipped_nets.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/param_file.h"
@@ -33,6 +34,9 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   }
   p.shin_min_span_width_fraction = f.getInRange("shin_min_span_width_fraction", 0, 5);
   p.shin_max_spread_height_fraction = f.getInRange("shin_max_spread_height_fraction", 0, 1);
+  p.feet_min_confidence = f.getInRange("feet_min_confidence", 0.34, 1);
+  p.feet_step_height_fraction = f.getInRange("feet_step_height_fraction", 0.01, 0.5);
+  p.feet_max_steps = static_cast<int>(f.getInRange("feet_max_steps", 0, 10));
   f.finish();
   return p;
 }
@@ -48,18 +52,91 @@ cnn::PatchBox robotPatchBox(const RobotProposal& proposal) {
 }
 
 RobotDetector::RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net,
-                             FieldDimensions field)
-    : params_(params), net_(std::move(robot_net)), field_(field) {
+                             FieldDimensions field, std::optional<cnn::Classifier> feet_net)
+    : params_(params), net_(std::move(robot_net)), field_(field), feet_net_(std::move(feet_net)) {
   if (net_.input().width != 24 || net_.input().height != 24 || net_.classes() != 2) {
     throw Error("robot detector: RobotNet must take 24x24 patches and give 2 classes");
+  }
+  if (feet_net_ && (feet_net_->input().width != 24 || feet_net_->input().height != 24 ||
+                    feet_net_->classes() != 3)) {
+    throw Error("robot detector: RobotFeetNet must take 24x24 patches and give 3 classes");
   }
 }
 
 RobotDetector RobotDetector::loadDefault() {
   const cnn::ShippedNet& s = cnn::kShippedNets[0];
-  return RobotDetector(RobotDetectorParams::loadDefault(),
-                       cnn::Classifier::load(s.cfgPath(), s.weightsPath()),
-                       FieldDimensions::loadDefault());
+  const cnn::ShippedNet& f = cnn::kShippedNets[6];
+  return RobotDetector(
+      RobotDetectorParams::loadDefault(), cnn::Classifier::load(s.cfgPath(), s.weightsPath()),
+      FieldDimensions::loadDefault(), cnn::Classifier::load(f.cfgPath(), f.weightsPath()));
+}
+
+std::optional<RobotProposal> feetMoved(const RobotProposal& box, const CameraModel& camera,
+                                       double step_height_fraction, int dir,
+                                       const FieldDimensions& field) {
+  const auto h = camera.robotHeightPx(box.feet_px, field.robot_height_m);
+  if (!h) return std::nullopt;
+  const Eigen::Vector2d feet = box.feet_px + Eigen::Vector2d(0, dir * step_height_fraction * *h);
+  const auto h_moved = camera.robotHeightPx(feet, field.robot_height_m);
+  if (!h_moved) return std::nullopt;
+  const double scale = *h_moved / *h;
+  RobotProposal out = box;
+  out.feet_px = feet;
+  out.box.x0 = feet.x() + (box.box.x0 - box.feet_px.x()) * scale;
+  out.box.x1 = feet.x() + (box.box.x1 - box.feet_px.x()) * scale;
+  out.box.y0 = feet.y() + (box.box.y0 - box.feet_px.y()) * scale;
+  out.box.y1 = feet.y() + (box.box.y1 - box.feet_px.y()) * scale;
+  return out;
+}
+
+namespace {
+
+// Whether the box lies between the image's top and bottom rows (RobotFeetNet reads a robot's
+// height in its patch: a box the border cuts has no feet or head to see).
+bool insideRows(const PixelBox& box, const GrayView& image) {
+  return box.y0 >= 0 && box.y1 <= image.height;
+}
+
+}  // namespace
+
+void RobotDetector::moveFeet(const GrayView& image, const CameraModel& camera,
+                             std::vector<RobotProposal>& boxes, const std::vector<int>& which,
+                             const std::vector<float>& robot_net_patches) const {
+  if (!feet_net_ || params_.feet_max_steps <= 0 || which.empty()) return;
+  const cnn::Shape& in = feet_net_->input();
+  const std::size_t n = static_cast<std::size_t>(in.size());
+  const bool same_input = feet_net_->net().normalization() == net_.net().normalization();
+  std::vector<int> moving = which;
+  std::vector<int> last(boxes.size(), 0);  // the direction of each box's last step
+  std::vector<float> inputs(which.size() * n);
+  std::vector<float> probs(which.size() * 3);
+  for (int step = 0; step < params_.feet_max_steps && !moving.empty(); ++step) {
+    for (std::size_t k = 0; k < moving.size(); ++k) {
+      // The first look at an unmoved box is RobotNet's own patch (same size and normalisation).
+      if (step == 0 && same_input) {
+        std::copy_n(robot_net_patches.data() + moving[k] * n, n, inputs.data() + k * n);
+      } else {
+        cnn::extractPatch(image, robotPatchBox(boxes[moving[k]]), in.width, in.height,
+                          feet_net_->net().normalization(), inputs.data() + k * n);
+      }
+    }
+    feet_net_->run(inputs.data(), static_cast<int>(moving.size()), probs.data());
+    std::vector<int> next;
+    for (std::size_t k = 0; k < moving.size(); ++k) {
+      const int i = moving[k];
+      const int dir = probs[3 * k + 1] >= params_.feet_min_confidence   ? 1
+                      : probs[3 * k + 2] >= params_.feet_min_confidence ? -1
+                                                                        : 0;
+      if (dir == 0 || dir == -last[i]) continue;  // right, or back where it came from
+      const auto moved =
+          feetMoved(boxes[i], camera, params_.feet_step_height_fraction, dir, field_);
+      if (!moved || !insideRows(moved->box, image)) continue;
+      boxes[i] = *moved;
+      last[i] = dir;
+      next.push_back(i);
+    }
+    moving = std::move(next);
+  }
 }
 
 std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel& camera,
@@ -213,14 +290,21 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
                                              std::vector<float>* confidences) const {
   std::vector<RobotProposal> seen = proposals;
   std::vector<float> robot;
+  // RobotNet's input per box seen (RobotFeetNet's first look reuses it).
+  const cnn::Shape& in = net_.input();
+  const std::size_t patch_size = static_cast<std::size_t>(in.size());
+  std::vector<float> patches;
   const auto classify = [&](std::size_t from) {
     if (seen.size() == from) return;
-    std::vector<cnn::PatchBox> boxes;
-    boxes.reserve(seen.size() - from);
-    for (std::size_t i = from; i < seen.size(); ++i) boxes.push_back(robotPatchBox(seen[i]));
-    std::vector<float> probs;
-    net_.classify(image, boxes, probs);
-    for (std::size_t i = 0; i < boxes.size(); ++i) robot.push_back(probs[2 * i + 1]);
+    patches.resize(seen.size() * patch_size);
+    for (std::size_t i = from; i < seen.size(); ++i) {
+      cnn::extractPatch(image, robotPatchBox(seen[i]), in.width, in.height,
+                        net_.net().normalization(), patches.data() + i * patch_size);
+    }
+    std::vector<float> probs((seen.size() - from) * 2);
+    net_.run(patches.data() + from * patch_size, static_cast<int>(seen.size() - from),
+             probs.data());
+    for (std::size_t i = 0; i < seen.size() - from; ++i) robot.push_back(probs[2 * i + 1]);
   };
   // With candidates behind robots looked at, every held-back candidate is classified: all in one
   // batch with the proposals.
@@ -281,6 +365,26 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     }
     if (!excluded) accepted[i] = robot[i];
   }
+  // The accepted boxes with their feet moved to their robots' (RobotFeetNet), before the boxes
+  // are compared; but not a box the image's top or bottom cuts, nor one whose feet point lies in
+  // a nearer accepted box (lower feet): that robot hides its feet, or it is that robot's part.
+  std::vector<RobotProposal> placed = seen;
+  {
+    std::vector<int> which;
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+      if (accepted[i] <= 0 || !insideRows(seen[i].box, image)) continue;
+      const Eigen::Vector2d& f = seen[i].feet_px;
+      bool hidden = false;
+      for (std::size_t k = 0; k < seen.size() && !hidden; ++k) {
+        const PixelBox& b = seen[k].box;
+        hidden = accepted[k] > 0 && seen[k].feet_px.y() > f.y() && f.x() > b.x0 && f.x() < b.x1 &&
+                 f.y() > b.y0 && f.y() < b.y1;
+      }
+      if (!hidden) which.push_back(static_cast<int>(i));
+    }
+    moveFeet(image, camera, placed, which, patches);
+    for (int i : which) proposal_boxes[i] = placed[i].box;
+  }
   // An accepted box whose feet lie in the lower part of a nearer accepted box (lower in the
   // image, taken first) is that robot's knee or hand, or a robot behind it: it stays only from
   // min_behind_robot_confidence, as a held-back candidate behind a robot does. (The proposer holds
@@ -291,12 +395,12 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       if (accepted[i] > 0) order.push_back(static_cast<int>(i));
     }
     std::stable_sort(order.begin(), order.end(),
-                     [&](int a, int b) { return seen[a].feet_px.y() > seen[b].feet_px.y(); });
+                     [&](int a, int b) { return placed[a].feet_px.y() > placed[b].feet_px.y(); });
     std::vector<int> standing;
     for (int i : order) {
       bool behind = false;
       for (int k : standing) {
-        behind |= feetInLowerPart(seen[i].feet_px, seen[k], params_.behind_lower_part_fraction);
+        behind |= feetInLowerPart(placed[i].feet_px, placed[k], params_.behind_lower_part_fraction);
       }
       if (behind && accepted[i] < params_.min_behind_robot_confidence) {
         accepted[i] = 0;
@@ -307,7 +411,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   }
   std::vector<RobotPercept> out;
   for (int i : keptRobotBoxes(proposal_boxes, accepted, params_)) {
-    const RobotProposal& p = seen[i];
+    const RobotProposal& p = placed[i];
     RobotPercept r;
     r.box = p.box;
     r.feet_px = p.feet_px;

@@ -7,7 +7,9 @@
 // candidates (magenta).
 //   robot_probe SCENARIO [frames_per_case] [case] [png_dir] [misses_only]
 // With RP_EXACT=1 it also prints every feet point, rejection, proposal and percept of the frame
-// at full precision (to check that a speed-up changes nothing).
+// at full precision (to check that a speed-up changes nothing). With RP_SHIFT=1, per demanded
+// robot, RobotNet's score on the proposer-shaped box about its true feet moved by -0.2 to 0.2 of
+// its height (README robot21: RobotNet does not tell where the feet are).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -16,12 +18,14 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <string>
 
 #include "colorfree/groundtruth/field_markings.h"
 #include "colorfree/groundtruth/matching.h"
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/groundtruth/truth_in_image.h"
+#include "colorfree/perception/cnn/classifier.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/field_dimensions.h"
 #include "colorfree/perception/pipeline.h"
@@ -78,6 +82,12 @@ int probe(int argc, char** argv) {
   env("RD_HELD", config.robot_detector.min_held_back_confidence);
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
   env("RD_SHINFILL", config.robot_detector.shin_min_fill_fraction);
+  env("RD_SHINGAP", config.robot_detector.shin_gap_height_fraction);
+  env("RD_SHINMIN", config.robot_detector.shin_min_height_fraction);
+  env("RD_SHINSPAN", config.robot_detector.shin_min_span_width_fraction);
+  env("RD_FEETCONF", config.robot_detector.feet_min_confidence);
+  env("RD_FEETSTEP", config.robot_detector.feet_step_height_fraction);
+  env("RD_FEETN", config.robot_detector.feet_max_steps);
   env("RD_INSIDE", config.robot_detector.max_inside_fraction);
   env("RD_IOU", config.robot_detector.max_overlap_iou);
   env("RP_BESIDE", rpp.beside_width_factor);
@@ -94,6 +104,10 @@ int probe(int argc, char** argv) {
   // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
   const bool exact_dump = std::getenv("RP_EXACT") != nullptr && std::atoi(std::getenv("RP_EXACT")) != 0;
   const Pipeline pipeline(config);
+  const bool shift_probe = std::getenv("RP_SHIFT") != nullptr;
+  const std::string mdir = config.model_dir.empty() ? cnn::defaultModelDir() : config.model_dir;
+  const cnn::Classifier robot_net =
+      cnn::Classifier::load(mdir + "/robot_net.cfg", mdir + "/robot_net.weights");
   const RobotProposer proposer(config.robot_proposer, config.field);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
   int truths = 0, prop_hits = 0, hits = 0, fps = 0, frames_seen = 0;
@@ -144,6 +158,32 @@ int probe(int argc, char** argv) {
                     r.should_detect ? (!ph ? " >>> PROPOSAL MISS" : !dh ? " >>> NET MISS" : " ok")
                                     : "");
         if (!r.should_detect) continue;
+        if (shift_probe) {
+          const auto& fc = f.perception_camera;
+          std::vector<cnn::PatchBox> pbs;
+          const double shifts[] = {-0.2, -0.15, -0.1, -0.05, 0, 0.05, 0.1, 0.15, 0.2};
+          const auto h0 = fc.robotHeightPx(r.ground_px, config.field.robot_height_m);
+          if (h0) {
+            for (double s : shifts) {
+              const Eigen::Vector2d g(r.ground_px.x(), r.ground_px.y() + s * *h0);
+              const auto h = fc.robotHeightPx(g, config.field.robot_height_m);
+              if (!h) {
+                pbs.push_back({0, 0, 1, 1});
+                continue;
+              }
+              const double w = rpp.box_width_factor * *h * config.field.robot_width_m /
+                               config.field.robot_height_m;
+              const double y1 = g.y() + rpp.box_below_feet_fraction * *h;
+              const double y0 = y1 - rpp.box_height_factor * *h;
+              pbs.push_back({float(g.x() - w / 2), float(y0), float(w), float(y1 - y0)});
+            }
+            std::vector<float> pr;
+            robot_net.classify(frame.image, pbs, pr);
+            std::printf("     SHIFT h=%.0f", *h0);
+            for (std::size_t k = 0; k < pbs.size(); ++k) std::printf(" %.2f", pr[2 * k + 1]);
+            std::printf("\n");
+          }
+        }
         ++truths;
         prop_hits += ph;
         hits += dh;

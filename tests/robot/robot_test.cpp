@@ -795,6 +795,130 @@ TEST(RobotDetector, ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOther
   EXPECT_EQ(off[0].box.x0, near.box.x0);
 }
 
+// A stand-in for RobotFeetNet reading the patch's lower rows (unit normalisation): "feet
+// lower" when its bottom row (B, row 23) is bright, "feet higher" when the two rows above it (C,
+// rows 21-22) are dark, "right" when C is bright and B dark: logits 20 C - 20 B - 5, 20 B - 10,
+// 10 - 20 C. With `always_lower`, "feet lower" whatever the patch.
+cnn::Classifier feetStandIn(bool always_lower = false) {
+  cnn::Net n = cnn::parseDarknetCfg(
+      "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
+      "[convolutional]\nfilters=3\nsize=24\nstride=1\nactivation=linear\n\n[avgpool]\n\n"
+      "[softmax]\n",
+      "feet net");
+  std::vector<float>& w = n.params();
+  EXPECT_EQ(w.size(), 3u + 3u * 576u);
+  std::fill(w.begin(), w.end(), 0.0f);
+  if (always_lower) {
+    w[1] = 10;
+    return cnn::Classifier(std::move(n));
+  }
+  w[0] = -5;
+  w[1] = -10;
+  w[2] = 10;
+  const auto weight = [&](int filter, int row, int col) -> float& {
+    return w[3 + filter * 576 + row * 24 + col];
+  };
+  for (int col = 0; col < 24; ++col) {
+    for (int row : {21, 22}) {
+      weight(0, row, col) = 20.0f / 48;
+      weight(2, row, col) = -20.0f / 48;
+    }
+    weight(0, 23, col) = -20.0f / 24;
+    weight(1, 23, col) = 20.0f / 24;
+  }
+  return cnn::Classifier(std::move(n));
+}
+
+// A proposer-shaped box (robot_proposer.yaml's geometry) about a feet point.
+RobotProposal proposerShapedBox(const CameraModel& cam, const Eigen::Vector2d& feet) {
+  const RobotProposerParams pp = RobotProposerParams::loadDefault();
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  const double h = *cam.robotHeightPx(feet, dims.robot_height_m);
+  const double w = pp.box_width_factor * h * dims.robot_width_m / dims.robot_height_m;
+  RobotProposal p;
+  p.feet_px = feet;
+  p.box = pixelBox(feet.x() - w / 2,
+                   feet.y() + pp.box_below_feet_fraction * h - pp.box_height_factor * h,
+                   feet.x() + w / 2, feet.y() + pp.box_below_feet_fraction * h);
+  return p;
+}
+
+TEST(RobotDetector, FeetMovedGoesStepsOfTheHeightAndScalesTheBoxAboutTheFeet) {
+  const CameraModel cam = testCamera();
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  const RobotProposal box = proposerShapedBox(cam, {300, 300});
+  const double h = *cam.robotHeightPx(box.feet_px, dims.robot_height_m);
+  const auto down = feetMoved(box, cam, 0.1, 1, dims);
+  ASSERT_TRUE(down);
+  EXPECT_NEAR(down->feet_px.y(), 300 + 0.1 * h, 1e-9);
+  EXPECT_EQ(down->feet_px.x(), 300);
+  // Nearer, so taller: the box grows by the expected heights' ratio, the feet where they were in
+  // it.
+  const double ratio = *cam.robotHeightPx(down->feet_px, dims.robot_height_m) / h;
+  EXPECT_GT(ratio, 1);
+  EXPECT_NEAR(down->box.height(), box.box.height() * ratio, 1e-9);
+  EXPECT_NEAR(down->box.width(), box.box.width() * ratio, 1e-9);
+  EXPECT_NEAR(down->box.y1 - down->feet_px.y(), (box.box.y1 - box.feet_px.y()) * ratio, 1e-9);
+  const auto up = feetMoved(box, cam, 0.1, -1, dims);
+  ASSERT_TRUE(up);
+  EXPECT_NEAR(up->feet_px.y(), 300 - 0.1 * h, 1e-9);
+  EXPECT_LT(up->box.height(), box.box.height());
+  // Above the horizon no robot stands.
+  EXPECT_FALSE(feetMoved(proposerShapedBox(cam, {300, 300}), cam, 5, -1, dims));
+}
+
+TEST(RobotDetector, FeetNetMovesAnAcceptedBoxToTheRobotsFeet) {
+  // A bright robot on the carpet, its feet at row 330, as tall as the camera expects there.
+  const CameraModel cam = testCamera();
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  const Eigen::Vector2d feet(320, 330);
+  const double h = *cam.robotHeightPx(feet, dims.robot_height_m);
+  GrayImage img = carpet(21);
+  cv::rectangle(wrap(img), cv::Point(int(320 - 0.25 * h), int(330 - h)),
+                cv::Point(int(320 + 0.25 * h), 329), cv::Scalar(230), cv::FILLED);
+  RobotDetectorParams params;  // 0.05 of the height a step, up to 6 steps, from 0.6
+  params.feet_step_height_fraction = 0.05;
+  params.feet_max_steps = 6;
+  params.shin_gap_height_fraction = 0;  // the feet net alone
+  cnn::Net brightness = cnn::parseDarknetCfg(
+      "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
+      "[convolutional]\nfilters=2\nsize=1\nstride=1\nactivation=linear\n\n[avgpool]\n\n[softmax]\n",
+      "brightness net");
+  brightness.params() = {0.0f, -20.0f, 0.0f, 40.0f};
+  const RobotDetector detector(params, cnn::Classifier(brightness), dims, feetStandIn());
+  for (const double start : {-0.2, -0.1, 0.0, 0.1, 0.2}) {  // fractions of h; negative: too high
+    SCOPED_TRACE(start);
+    const RobotProposal p = proposerShapedBox(cam, feet + Eigen::Vector2d(0, start * h));
+    const auto robots = detector.run(img.view(), cam, {p});
+    ASSERT_EQ(robots.size(), 1u);
+    EXPECT_NEAR(robots[0].feet_px.y(), 330, 0.06 * h);
+    EXPECT_NEAR(robots[0].feet_px.x(), 320, 1e-9);
+    // Without the net the box stays where the proposer put it.
+    const auto unmoved =
+        RobotDetector(params, cnn::Classifier(brightness), dims).run(img.view(), cam, {p});
+    ASSERT_EQ(unmoved.size(), 1u);
+    EXPECT_EQ(unmoved[0].feet_px.y(), p.feet_px.y());
+  }
+  // At most feet_max_steps steps, and none with 0.
+  const RobotProposal high = proposerShapedBox(cam, feet + Eigen::Vector2d(0, -0.2 * h));
+  params.feet_max_steps = 2;
+  auto robots = RobotDetector(params, cnn::Classifier(brightness), dims, feetStandIn(true))
+                    .run(img.view(), cam, {high});
+  ASSERT_EQ(robots.size(), 1u);
+  const auto once = feetMoved(high, cam, 0.05, 1, dims);
+  const auto twice = feetMoved(*once, cam, 0.05, 1, dims);
+  EXPECT_NEAR(robots[0].feet_px.y(), twice->feet_px.y(), 1e-9);
+  EXPECT_NEAR(robots[0].box.y0, twice->box.y0, 1e-9);
+  params.feet_max_steps = 0;
+  robots = RobotDetector(params, cnn::Classifier(brightness), dims, feetStandIn(true))
+               .run(img.view(), cam, {high});
+  ASSERT_EQ(robots.size(), 1u);
+  EXPECT_EQ(robots[0].feet_px.y(), high.feet_px.y());
+  // A feet net of the wrong shape is refused.
+  EXPECT_THROW(
+      RobotDetector(params, cnn::Classifier(brightness), dims, cnn::Classifier(brightness)), Error);
+}
+
 TEST(RobotDetector, ABoxBehindARobotOverlappingItLikeARobotIsItsKneeOrHand) {
   // The near robot's box reaches past the lit body onto the carpet; the held-back box at its knee
   // lies wholly on the body, and RobotNet is surer of it than of the robot.

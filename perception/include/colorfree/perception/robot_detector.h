@@ -68,6 +68,15 @@ struct RobotDetectorParams {
   /// flat ground; the ball's lower edge is round).
   double shin_min_span_width_fraction = 0.4;
   double shin_max_spread_height_fraction = 0.04;
+  /// RobotFeetNet (moveFeet): a box RobotNet accepted is moved down (up) by
+  /// feet_step_height_fraction of the robot's height while RobotFeetNet gives at least
+  /// feet_min_confidence that the robot's feet lie lower (higher) than the box's, up to
+  /// feet_max_steps times, never back, and never out of the image's rows (0 steps: never; so
+  /// without the net). Boxes the image's top or bottom row cuts, and boxes whose feet point lies
+  /// in a nearer accepted box (that robot hides the feet, or the box is its part), stay.
+  double feet_min_confidence = 0.6;
+  double feet_step_height_fraction = 0.05;
+  int feet_max_steps = 6;
 
   bool operator==(const RobotDetectorParams&) const = default;
   static RobotDetectorParams load(const std::string& path);
@@ -95,12 +104,22 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
                                         const RobotDetectorParams& params,
                                         const FieldDimensions& field);
 
+/// The box moved by `dir` steps of `step_height_fraction` of the robot's expected height at its
+/// feet point (down for positive), scaled about the feet by the expected heights' ratio. Empty
+/// where no robot can stand.
+std::optional<RobotProposal> feetMoved(const RobotProposal& box, const CameraModel& camera,
+                                       double step_height_fraction, int dir,
+                                       const FieldDimensions& field);
+
 /// Classifies robot proposals with RobotNet (24×24, paper 2.3) and turns the accepted ones into
-/// percepts with their ground point in the robot frame.
+/// percepts with their ground point in the robot frame. With RobotFeetNet (24×24: the feet row
+/// right, lower or higher than the box's) the accepted boxes' feet are moved to the robot's.
 class RobotDetector {
  public:
-  RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net, FieldDimensions field = {});
-  /// The shipped parameters and RobotNet (perception/models/robot_net.*).
+  RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net, FieldDimensions field = {},
+                std::optional<cnn::Classifier> feet_net = std::nullopt);
+  /// The shipped parameters, RobotNet and RobotFeetNet (perception/models/robot_net.*,
+  /// robot_feet_net.*).
   static RobotDetector loadDefault();
   /// `confidences` (optional) gets RobotNet's output for every proposal, in order.
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
@@ -118,9 +137,16 @@ class RobotDetector {
                                 std::vector<float>* confidences = nullptr) const;
 
  private:
+  /// The boxes `which` of `boxes` moved to their robots' feet (RobotFeetNet, see
+  /// feet_min_confidence), all of a step in one batch; `robot_net_patches` holds RobotNet's input
+  /// for every box as it was.
+  void moveFeet(const GrayView& image, const CameraModel& camera, std::vector<RobotProposal>& boxes,
+                const std::vector<int>& which, const std::vector<float>& robot_net_patches) const;
+
   RobotDetectorParams params_;
   cnn::Classifier net_;
   FieldDimensions field_;
+  std::optional<cnn::Classifier> feet_net_;
 };
 
 }  // namespace colorfree

@@ -30,6 +30,8 @@ struct ShippedNet {
   std::string weightsPath() const { return defaultModelDir() + "/" + stem + ".weights"; }
 };
 
+// One net a line.
+// clang-format off
 inline constexpr ShippedNet kShippedNets[] = {
     {"RobotNet", "robot_net", 24, {"none", "robot", nullptr, nullptr}, 884, 0.382, 0.969},
     {"BoostBallNet", "boost_ball_net", 12, {"none", "ball", nullptr, nullptr}, 125, 0.043, 0.965},
@@ -37,6 +39,8 @@ inline constexpr ShippedNet kShippedNets[] = {
     {"OriBoostNet", "ori_boost_net", 12, {"unusable", "usable", nullptr, nullptr}, 246, 0.059, 0.962},
     {"OriNet", "ori_net", 24, {"front", "back", "side_left", "side_right"}, 657, 0.329, 0.984},
     {"SmearedBallNet", "smeared_ball_net", 26, {"none", "ball", nullptr, nullptr}, 0, 0, 0},
+    {"RobotFeetNet", "robot_feet_net", 24, {"feet_right", "feet_lower", "feet_higher", nullptr}, 0, 0, 0},
 };
+// clang-format on
 
 }  // namespace colorfree::cnn
