@@ -151,12 +151,16 @@ int probe(int argc, char** argv) {
         bool ph = false, dh = false;
         for (const auto& p : props) ph = ph || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
         for (const auto& p : percepts) dh = dh || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
-        std::printf("  R%d ground=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) d=%.2f vis=%.2f %s%s%s%s\n",
-                    r.index, r.ground_px.x(), r.ground_px.y(), r.box.x0, r.box.y0, r.box.x1,
-                    r.box.y1, r.distance_m, r.visible_fraction, cut ? "cut:" : "", cuts.c_str(),
-                    r.should_detect ? " DEMANDED" : "",
-                    r.should_detect ? (!ph ? " >>> PROPOSAL MISS" : !dh ? " >>> NET MISS" : " ok")
-                                    : "");
+        std::printf(
+            "  R%d ground=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) d=%.2f vis=%.2f %s%s%s%s\n",
+            r.index, r.ground_px.x(), r.ground_px.y(), r.box.x0, r.box.y0, r.box.x1, r.box.y1,
+            r.distance_m, r.visible_fraction, cut ? "cut:" : "", cuts.c_str(),
+            r.should_detect ? " DEMANDED" : "",
+            r.should_detect ? (!ph   ? (dh ? " ok (no proposal: a box moved by RobotFeetNet)"
+                                           : " >>> PROPOSAL MISS")
+                               : !dh ? " >>> NET MISS"
+                                     : " ok")
+                            : "");
         if (!r.should_detect) continue;
         if (shift_probe) {
           const auto& fc = f.perception_camera;
