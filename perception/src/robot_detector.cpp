@@ -34,7 +34,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   }
   p.shin_min_span_width_fraction = f.getInRange("shin_min_span_width_fraction", 0, 5);
   p.shin_max_spread_height_fraction = f.getInRange("shin_max_spread_height_fraction", 0, 1);
-  p.feet_min_confidence = f.getInRange("feet_min_confidence", 0.34, 1);
+  p.feet_min_confidence = f.getInRange("feet_min_confidence", 0.5, 1);  // one class at most
   p.feet_step_height_fraction = f.getInRange("feet_step_height_fraction", 0.01, 0.5);
   p.feet_max_steps = static_cast<int>(f.getInRange("feet_max_steps", 0, 10));
   f.finish();
