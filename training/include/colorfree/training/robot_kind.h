@@ -39,7 +39,8 @@ struct RobotLabelRules {
 /// real ignore-region and high-contrast stages); a proposal is a robot when the scorer's matching
 /// rule pairs it with a robot that should be detected, none when it pairs with no robot. The
 /// orientation kinds run the real lines generator on the proposals that are robots and label its
-/// regions from the true heading. Random negatives are drawn from a generator seeded by the
+/// regions from the true heading. RobotFeetNet's kind labels the proposals standing on a robot by
+/// where its feet are against theirs (feetCandidate). Random negatives are drawn from a generator seeded by the
 /// frame's pixels, so the same frame gives the same samples.
 class RobotKind : public ObjectKind {
  public:
@@ -51,14 +52,15 @@ class RobotKind : public ObjectKind {
   /// OriNet's side classes say which way the robot faces in the image: a mirrored side region
   /// faces the other way, so only front and back (and the other nets' classes) may be flipped.
   std::vector<bool> flipAllowed() const override;
-  /// RobotNet: robot (1) and none (0). The orientation nets have no object-free scenes to
-  /// bootstrap on; their labels here are usable/unusable and front/side (facing left).
+  /// RobotNet: robot (1) and none (0). RobotFeetNet and the orientation nets have no object-free
+  /// scenes to bootstrap on; their labels here are unused.
   int positiveLabel() const override { return 1; }
   int negativeLabel() const override { return which_ == RobotNetChoice::kOriNet ? 2 : 0; }
   std::vector<Candidate> proposals(const GrayImage& image, const CameraModel& camera,
                                    const FrameTruth& truth) const override;
-  /// RobotNet: a proposal-shaped box above every true robot's ground point. The orientation
-  /// kinds: none (their regions only exist where the lines generator puts them).
+  /// RobotNet: a proposal-shaped box above every true robot's ground point. RobotFeetNet: such
+  /// boxes with the feet moved by 0, ±0.15 and ±0.3 of the robot's height. The orientation kinds:
+  /// none (their regions only exist where the lines generator puts them).
   std::vector<Candidate> truthSamples(const GrayImage& image, const CameraModel& camera,
                                       const FrameTruth& truth) const override;
 
