@@ -285,12 +285,7 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
     const Eigen::Vector2d feet(ux(rng), uy(rng));
     const auto h = camera.robotHeightPx(feet, dims.robot_height_m);
     if (!h || *h < 10) continue;
-    PixelBox b;
-    const double w = pp.box_width_factor * *h * dims.robot_width_m / dims.robot_height_m;
-    b.x0 = feet.x() - w / 2;
-    b.x1 = feet.x() + w / 2;
-    b.y1 = feet.y() + pp.box_below_feet_fraction * *h;
-    b.y0 = b.y1 - pp.box_height_factor * *h;
+    const PixelBox b = *proposerBox(camera, pp, dims, feet);
     bool near_robot = false;
     for (const RobotInImage& r : truth.robots) {
       if (r.in_view && boxIou(r.box, b) > 0.05) near_robot = true;
