@@ -2,23 +2,14 @@
 
 #include <gtest/gtest.h>
 
-#include <numbers>
-
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/perception/pipeline.h"
+#include "synthetic_field.h"
 
 using namespace colorfree;
 using namespace colorfree::training;
 
 namespace {
-
-CameraModel testCamera() {
-  CameraPose pose;
-  pose.height_m = 0.5;
-  pose.pitch_rad = 14 * std::numbers::pi / 180;
-  return CameraModel(CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * std::numbers::pi / 180),
-                     pose);
-}
 
 RobotInImage robotAt(int index, const Eigen::Vector2d& ground_px, bool should_detect) {
   RobotInImage r;
@@ -42,7 +33,7 @@ std::vector<int> labels(const std::vector<Candidate>& candidates) {
 // -0.15, +0.15, -0.3 and +0.3 of its height is right (0), or the robot's feet are lower (1: the box
 // stands too high) or higher (2).
 TEST(RobotKind, FeetNetSamplesAreLabelledByWhereTheRobotsFeetAre) {
-  const CameraModel cam = testCamera();
+  const CameraModel cam = test::testCamera(14);
   const GrayImage image(640, 480);
   FrameTruth truth;
   truth.robots = {robotAt(0, {320, 330}, true), robotAt(1, {80, 300}, false)};
