@@ -102,7 +102,7 @@ bool insideRows(const PixelBox& box, const GrayView& image) {
 void RobotDetector::moveFeet(const GrayView& image, const CameraModel& camera,
                              std::vector<RobotProposal>& boxes, const std::vector<int>& which,
                              const std::vector<float>& robot_net_patches) const {
-  if (!feet_net_ || params_.feet_max_steps <= 0 || which.empty()) return;
+  if (which.empty()) return;
   const cnn::Shape& in = feet_net_->input();
   const std::size_t n = static_cast<std::size_t>(in.size());
   const bool same_input = feet_net_->net().normalization() == net_.net().normalization();
@@ -369,7 +369,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   // are compared; but not a box the image's top or bottom cuts, nor one whose feet point lies in
   // a nearer accepted box (lower feet): that robot hides its feet, or it is that robot's part.
   std::vector<RobotProposal> placed = seen;
-  {
+  if (feet_net_ && params_.feet_max_steps > 0) {
     std::vector<int> which;
     for (std::size_t i = 0; i < seen.size(); ++i) {
       if (accepted[i] <= 0 || !insideRows(seen[i].box, image)) continue;

@@ -139,7 +139,7 @@ class RobotDetector {
  private:
   /// The boxes `which` of `boxes` moved to their robots' feet (RobotFeetNet, see
   /// feet_min_confidence), all of a step in one batch; `robot_net_patches` holds RobotNet's input
-  /// for every box as it was.
+  /// for every box as it was. Only with the net and feet_max_steps > 0.
   void moveFeet(const GrayView& image, const CameraModel& camera, std::vector<RobotProposal>& boxes,
                 const std::vector<int>& which, const std::vector<float>& robot_net_patches) const;
 
