@@ -104,10 +104,12 @@ int probe(int argc, char** argv) {
   // RP_EXACT=1: also every feet point, rejection, proposal and percept at full precision.
   const bool exact_dump = std::getenv("RP_EXACT") != nullptr && std::atoi(std::getenv("RP_EXACT")) != 0;
   const Pipeline pipeline(config);
-  const bool shift_probe = std::getenv("RP_SHIFT") != nullptr;
-  const std::string mdir = config.model_dir.empty() ? cnn::defaultModelDir() : config.model_dir;
-  const cnn::Classifier robot_net =
-      cnn::Classifier::load(mdir + "/robot_net.cfg", mdir + "/robot_net.weights");
+  // RP_SHIFT=1: RobotNet (loaded only then) on the true feet's box moved up and down.
+  std::optional<cnn::Classifier> shift_net;
+  if (std::getenv("RP_SHIFT") != nullptr) {
+    const std::string dir = config.model_dir.empty() ? cnn::defaultModelDir() : config.model_dir;
+    shift_net = cnn::Classifier::load(dir + "/robot_net.cfg", dir + "/robot_net.weights");
+  }
   const RobotProposer proposer(config.robot_proposer, config.field);
   sim::ScenarioRunner runner(sim::Scenario::load(argv[1]), sim::worldRendererFactory());
   int truths = 0, prop_hits = 0, hits = 0, fps = 0, frames_seen = 0;
@@ -162,7 +164,7 @@ int probe(int argc, char** argv) {
                                      : " ok")
                             : "");
         if (!r.should_detect) continue;
-        if (shift_probe) {
+        if (shift_net) {
           const auto& fc = f.perception_camera;
           std::vector<cnn::PatchBox> pbs;
           const double shifts[] = {-0.2, -0.15, -0.1, -0.05, 0, 0.05, 0.1, 0.15, 0.2};
@@ -182,7 +184,7 @@ int probe(int argc, char** argv) {
               pbs.push_back({float(g.x() - w / 2), float(y0), float(w), float(y1 - y0)});
             }
             std::vector<float> pr;
-            robot_net.classify(frame.image, pbs, pr);
+            shift_net->classify(frame.image, pbs, pr);
             std::printf("     SHIFT h=%.0f", *h0);
             for (std::size_t k = 0; k < pbs.size(); ++k) std::printf(" %.2f", pr[2 * k + 1]);
             std::printf("\n");
