@@ -12,6 +12,8 @@ namespace colorfree {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMinDirectionZ = 1e-9;
+// The exposure smear's bound (a sanity check, not a limit met in use).
+constexpr double kMaxSmearPx = 10000;
 }  // namespace
 
 CameraIntrinsics CameraIntrinsics::fromHorizontalFov(int width_px, int height_px,
@@ -78,6 +80,13 @@ void CameraModel::validate(const std::string& origin) const {
   }
 }
 
+void CameraModel::setExposureSmearPx(const Eigen::Vector2d& smear_px) {
+  if (!smear_px.allFinite() || smear_px.cwiseAbs().maxCoeff() > kMaxSmearPx) {
+    throw Error("camera model: exposure smear must be finite and within 10000 px");
+  }
+  exposure_smear_px_ = smear_px;
+}
+
 CameraModel CameraModel::load(const std::string& path) {
   ParamFile f(path);
   CameraIntrinsics k;
@@ -94,12 +103,19 @@ CameraModel CameraModel::load(const std::string& path) {
   p.roll_rad = f.getInRange("roll_deg", -180, 180) * kPi / 180;
   p.pitch_rad = f.getInRange("pitch_deg", -90, 90) * kPi / 180;
   p.yaw_rad = f.getInRange("yaw_deg", -180, 180) * kPi / 180;
+  // Optional: the camera's own smear over the exposure (zero when absent).
+  Eigen::Vector2d smear = Eigen::Vector2d::Zero();
+  if (f.has("exposure_smear_x_px") || f.has("exposure_smear_y_px")) {
+    smear = {f.getInRange("exposure_smear_x_px", -kMaxSmearPx, kMaxSmearPx),
+             f.getInRange("exposure_smear_y_px", -kMaxSmearPx, kMaxSmearPx)};
+  }
   f.finish();
   CameraModel m;
   m.intrinsics_ = k;
   m.camera_to_robot_ = cameraToRobotFromPose(p);
   m.validate(path);
   m.robot_to_camera_ = m.camera_to_robot_.inverse();
+  m.exposure_smear_px_ = smear;
   return m;
 }
 
@@ -124,6 +140,10 @@ void CameraModel::save(const std::string& path) const {
   out << YAML::Key << "roll_deg" << YAML::Value << roll * 180 / kPi;
   out << YAML::Key << "pitch_deg" << YAML::Value << pitch * 180 / kPi;
   out << YAML::Key << "yaw_deg" << YAML::Value << yaw * 180 / kPi;
+  if (!exposure_smear_px_.isZero(0)) {
+    out << YAML::Key << "exposure_smear_x_px" << YAML::Value << exposure_smear_px_.x();
+    out << YAML::Key << "exposure_smear_y_px" << YAML::Value << exposure_smear_px_.y();
+  }
   out << YAML::EndMap;
   std::ofstream file(path);
   file << out.c_str() << "\n";

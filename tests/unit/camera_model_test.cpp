@@ -185,6 +185,38 @@ TEST(CameraModel, FileRoundTrip) {
   const CameraModel back = CameraModel::load(path);
   EXPECT_TRUE(back.cameraToRobot().isApprox(cam.cameraToRobot(), 1e-9));
   EXPECT_DOUBLE_EQ(back.intrinsics().focal_x_px, cam.intrinsics().focal_x_px);
+  EXPECT_TRUE(back.exposureSmearPx().isZero(0));  // absent: the camera was still
+  // The camera's own smear over the exposure (optional keys, written only when not zero).
+  CameraModel turning = cam;
+  turning.setExposureSmearPx({12.5, -3.25});
+  turning.save(path);
+  EXPECT_EQ(CameraModel::load(path).exposureSmearPx(), Eigen::Vector2d(12.5, -3.25));
+  std::filesystem::remove(path);
+}
+
+TEST(CameraModel, ExposureSmearKeysComeInPairsWithinBounds) {
+  const std::string path = ::testing::TempDir() + "/camera_smear.yaml";
+  const std::string base =
+      "width_px: 640\nheight_px: 480\nfocal_x_px: 560\nfocal_y_px: 560\ncenter_x_px: 320\n"
+      "center_y_px: 240\nx_m: 0\ny_m: 0\nheight_m: 0.5\nroll_deg: 0\npitch_deg: 10\nyaw_deg: 0\n";
+  const auto fails = [&](const std::string& extra, const std::string& key) {
+    {
+      std::ofstream f(path);
+      f << base << extra;
+    }
+    try {
+      CameraModel::load(path);
+    } catch (const Error& e) {
+      return std::string(e.what()).find(path) != std::string::npos &&
+             std::string(e.what()).find(key) != std::string::npos;
+    }
+    return false;
+  };
+  EXPECT_TRUE(fails("exposure_smear_x_px: 4\n", "exposure_smear_y_px"));  // one of the pair
+  EXPECT_TRUE(fails("exposure_smear_x_px: 4\nexposure_smear_y_px: .nan\n", "exposure_smear_y_px"));
+  EXPECT_TRUE(fails("exposure_smear_x_px: 1e6\nexposure_smear_y_px: 0\n", "exposure_smear_x_px"));
+  EXPECT_FALSE(fails("exposure_smear_x_px: -4\nexposure_smear_y_px: 1.5\n", "exposure_smear"));
+  EXPECT_EQ(CameraModel::load(path).exposureSmearPx(), Eigen::Vector2d(-4, 1.5));
   std::filesystem::remove(path);
 }
 

@@ -29,6 +29,9 @@ class ParamFile {
     }
   }
 
+  /// Whether the file holds `key` (for optional keys; reading one is still a `get`).
+  bool has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+
   /// A number that must lie in [lo, hi]; NaN is rejected.
   double getInRange(const std::string& key, double lo, double hi);
 
