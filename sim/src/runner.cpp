@@ -173,6 +173,8 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
   frame.truth = scenarioStateAt(settings, frame_index);
 
   FloatImage exposure;
+  // The camera's own turn over the exposure, in the image.
+  Eigen::Vector2d exposure_smear = Eigen::Vector2d::Zero();
   if (plan.isInstant()) {
     setSceneAt(renderer, settings, frame_index, t);
     RenderOutput out = renderer.render(settings.camera, w, h, object_map);
@@ -191,6 +193,12 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
     // The camera's own turn between sub-frames leaves gaps between their copies; fill them.
     const Eigen::Vector2d step = meanSubframeStepPx(cameras);
     exposure = smearAlong(exposure, step.x(), step.y());
+    // The sub-frames span the exposure and the rolling shutter's readout: the exposure alone is
+    // exposure / spacing steps (none without blur, where the sub-frames are readout bands).
+    const std::vector<double>& times = plan.subframeTimes();
+    const bool blur = settings.effects.blur_subframes > 1 && settings.effects.exposure_s > 0;
+    if (blur && times.size() > 1)
+      exposure_smear = step * (settings.effects.exposure_s / (times[1] - times[0]));
     // The truth and the object map are at the frame time (the middle of the exposure).
     setSceneAt(renderer, settings, frame_index, t);
     if (object_map)
@@ -199,6 +207,8 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
   frame.truth.camera.model = renderer.cameraModel(settings.camera, w, h);
   frame.truth.camera.camera_to_field = renderer.cameraToField(settings.camera);
   frame.perception_camera = perceivedCamera(frame.truth.camera.model, settings.camera_error);
+  // What the robot's kinematics would tell it (head joint velocities times the exposure time).
+  frame.perception_camera.setExposureSmearPx(exposure_smear);
   exposure = applyOptics(std::move(exposure), settings.effects);
   frame.image = applySensor(exposure, settings.effects, frameSeed(settings.seed, frame_index));
   return frame;

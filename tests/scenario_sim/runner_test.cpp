@@ -198,6 +198,33 @@ TEST(RunnerTest, MotionBlurAveragesSubframesAcrossTheExposure) {
   EXPECT_EQ(f.truth.object_map.at(150, 3), kObjectBall);
 }
 
+// The perception's camera carries the camera's own smear over the exposure (what a robot's
+// kinematics would tell it): the head turning left at 20 * 2 pi deg/s at t = 0 moves the still
+// scene right by the focal length times the 20 ms turn; none with a still head or without blur.
+TEST(RunnerTest, PerceptionCameraCarriesTheExposureSmearOfTheHeadsTurn) {
+  const auto smear = [](const std::string& head, const std::string& effects) {
+    FakeLog log;
+    std::string text = scenario("effects: " + effects + "\n");
+    const std::string still = "head: {yaw_deg: 10}";
+    text.replace(text.find(still), still.size(), head);
+    ScenarioRunner runner(Scenario::parse(text, "fake.yaml"), fakeFactory(log));
+    return runner.render(0, 0, false).perception_camera.exposureSmearPx();
+  };
+  const std::string turning = "head: {yaw_deg: 10, yaw_amplitude_deg: 20, yaw_period_s: 1}";
+  const Eigen::Vector2d s = smear(turning, "{exposure_ms: 20, blur_subframes: 4}");
+  const double focal = 100 / std::tan(0.5);  // the fake camera: 200 px over 1 rad
+  const double turn =
+      2 * (20 * std::numbers::pi / 180) * std::sin(2 * std::numbers::pi * 0.010);  // over 20 ms
+  EXPECT_NEAR(s.x(), focal * turn, 0.03 * focal * turn);
+  EXPECT_NEAR(s.y(), 0, 0.05);
+  EXPECT_TRUE(smear("head: {yaw_deg: 10}", "{exposure_ms: 20, blur_subframes: 4}").isZero(1e-9));
+  EXPECT_TRUE(smear(turning, "{exposure_ms: 0}").isZero(0));
+  // A rolling shutter's sub-frames are readout bands, not exposure: only the exposure smears.
+  const Eigen::Vector2d banded =
+      smear(turning, "{exposure_ms: 20, blur_subframes: 4, rolling_shutter: true, readout_ms: 16}");
+  EXPECT_NEAR(banded.x(), focal * turn, 0.03 * focal * turn);
+}
+
 TEST(RunnerTest, RollingShutterSkewsAMovingBall) {
   FakeLog log;
   ScenarioRunner runner(Scenario::parse(scenario("effects: {rolling_shutter: true, readout_ms: 16, "
