@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -25,6 +26,8 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.smeared_min_coherence = f.getInRange("smeared_min_coherence", 0, 2);
   p.smeared_ball_min_confidence = f.getInRange("smeared_ball_min_confidence", 0, 1);
   p.smeared_min_radius_px = f.getInRange("smeared_min_radius_px", 0, 1000);
+  p.smeared_min_camera_smear_radii = f.getInRange("smeared_min_camera_smear_radii", 0, 100);
+  p.smeared_max_direction_deg = f.getInRange("smeared_max_direction_deg", 0, 90);
   p.smeared_centre_reach_radii = f.getInRange("smeared_centre_reach_radii", 1, 20);
   p.smeared_centre_min_contrast_gray = f.getInRange("smeared_centre_min_contrast_gray", 0, 255);
   p.rescale_up = f.getInRange("rescale_up", 0, 4);
@@ -196,12 +199,25 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   if (!kept_boxes.empty()) ball_net_.classify(image, kept_boxes, ball_prob);
   std::vector<float> smear(kept.size(), -1.0f);
   std::vector<Eigen::Vector2d> along(kept.size(), Eigen::Vector2d::UnitX());
+  std::vector<bool> smeared(kept.size(), false);  // routed to SmearedBallNet
+  const Eigen::Vector2d& camera_smear = camera.exposureSmearPx();
+  const double cos_max_direction =
+      std::cos(params_.smeared_max_direction_deg * std::numbers::pi / 180);
   if (params_.smeared_min_coherence <= 1) {  // the constructor made sure of the net
     for (std::size_t k = 0; k < kept.size(); ++k) {
       if (ball_prob[2 * k + 1] >= params_.ball_min_confidence) continue;
-      if (proposals[kept[k]].radius_px < params_.smeared_min_radius_px) continue;
+      const double radius = proposals[kept[k]].radius_px;
+      if (radius < params_.smeared_min_radius_px) continue;
+      if (camera_smear.norm() < params_.smeared_min_camera_smear_radii * radius) continue;
       smear[k] = static_cast<float>(patchSmear(image, kept_boxes[k], &along[k]));
-      if (smear[k] >= params_.smeared_min_coherence) smeared_boxes.push_back(kept_boxes[k]);
+      // (an undirected angle: the smear's direction has no sign)
+      const bool along_camera =
+          params_.smeared_max_direction_deg >= 90 ||
+          std::abs(along[k].dot(camera_smear)) >= cos_max_direction * camera_smear.norm();
+      if (smear[k] >= params_.smeared_min_coherence && along_camera) {
+        smeared[k] = true;
+        smeared_boxes.push_back(kept_boxes[k]);
+      }
     }
   }
   if (!smeared_boxes.empty()) smeared_net_->classify(image, smeared_boxes, smeared_prob);
@@ -282,7 +298,7 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     }
     all[i].sharpened_confidence = sharpened_conf[k];
     // (SmearedBallNet's answer counts for a patch neither other look took: one hit per proposal.)
-    if (smear[k] >= params_.smeared_min_coherence) {
+    if (smeared[k]) {
       all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];
       if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence &&
           rescaled_conf[k] < 0 && sharpened_conf[k] < params_.sharpen_min_confidence) {

@@ -542,13 +542,14 @@ TEST(BallDetector, SmearedBallCentreIsTheMiddleOfTheSmear) {
 // SmearedBallNet; the sharp ball's patch does not, nor one BallNet accepts. Without the bound
 // nothing is measured, and a bound without the net is refused.
 TEST(BallDetector, SmearedPatchesGoToSmearedBallNet) {
-  const CameraModel cam = test::testCamera(22);
+  CameraModel cam = test::testCamera(22);
   GrayImage image = test::renderScene(cam, carpetOnly(5));
   const test::DrawnBall b = test::drawBall(image, cam, {1.5, -0.1});
   const GrayImage smeared = smearedSideways(image, static_cast<int>(std::lround(1.5 * b.radius_px)));
+  cam.setExposureSmearPx({1.5 * b.radius_px, 0});  // the camera turned sideways by that much
   const std::vector<BallProposal> props = {{b.centre_px, b.radius_px, 1}};
   BallDetectorParams p = BallDetectorParams::loadDefault();
-  p.smeared_min_coherence = kSmearedMinCoherence;  // switched on (off in the shipped file)
+  p.smeared_min_coherence = kSmearedMinCoherence;  // the bound the routing was measured with
   p.boost_min_confidence = 0;  // BoostBallNet's view of the drawn ball is not what is tested here
   p.ball_min_confidence = 1.1;  // BallNet rejects everything, so every patch is measured
   p.sharpen_sigma_radii = 0;    // no sharpened look: only SmearedBallNet may take a rejected patch
@@ -583,6 +584,44 @@ TEST(BallDetector, SmearedPatchesGoToSmearedBallNet) {
   p.smeared_min_coherence = 0.5;
   EXPECT_THROW(BallDetector(p, net("boost_ball_net"), net("ball_net")), Error);
   EXPECT_NO_THROW(BallDetector(p, net("boost_ball_net"), net("ball_net"), net("smeared_ball_net")));
+}
+
+// With the camera's own smear required (smeared_min_camera_smear_radii), a smeared patch goes to
+// SmearedBallNet only when the camera file says the camera turned that far during the exposure,
+// along the patch's smear (smeared_max_direction_deg): a still camera, a smear too short and one
+// across the patch's all keep it from the net.
+TEST(BallDetector, SmearedBallNetOnlyWhereTheCameraTurnedAlongTheSmear) {
+  CameraModel cam = test::testCamera(22);
+  GrayImage image = test::renderScene(cam, carpetOnly(5));
+  const test::DrawnBall b = test::drawBall(image, cam, {1.5, -0.1});
+  const double r = b.radius_px;
+  const GrayImage smeared = smearedSideways(image, static_cast<int>(std::lround(1.5 * r)));
+  const std::vector<BallProposal> props = {{b.centre_px, r, 1}};
+  BallDetectorParams p = BallDetectorParams::loadDefault();
+  p.smeared_min_coherence = kSmearedMinCoherence;
+  p.smeared_min_camera_smear_radii = 0.5;
+  p.smeared_max_direction_deg = 20;
+  p.boost_min_confidence = 0;
+  p.ball_min_confidence = 1.1;  // BallNet rejects everything, so every patch is measured
+  p.sharpen_sigma_radii = 0;
+  const BallDetector detector = BallDetector::load(p);
+  std::vector<BallDecision> d;
+  const auto routed = [&](const Eigen::Vector2d& camera_smear_px) {
+    cam.setExposureSmearPx(camera_smear_px);
+    detector.run(smeared.view(), cam, props, &d);
+    return d.at(0).smeared_confidence >= 0;
+  };
+  EXPECT_FALSE(routed({0, 0}));              // a still camera
+  EXPECT_FALSE(routed({0.4 * r, 0}));        // turned less than half a radius
+  EXPECT_TRUE(routed({1.5 * r, 0}));         // along the smear (sideways)
+  EXPECT_TRUE(routed({-1.5 * r, 0.3 * r}));  // either way, 11 degrees off
+  EXPECT_FALSE(routed({0, 1.5 * r}));        // across it
+  EXPECT_FALSE(routed({1.5 * r, 0.7 * r}));  // 25 degrees off
+  p.smeared_max_direction_deg = 90;          // any direction
+  cam.setExposureSmearPx({0, 1.5 * r});
+  BallDetector::load(p).run(smeared.view(), cam, props, &d);
+  EXPECT_GE(d.at(0).smeared_confidence, 0);
+  EXPECT_THROW(cam.setExposureSmearPx({std::nan(""), 0}), Error);
 }
 
 // A soft lens: the frame blurred by a Gaussian of `sigma` pixels (the border repeated).

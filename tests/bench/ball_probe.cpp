@@ -4,10 +4,12 @@
 //   ball_probe SCENARIO [frames_per_case] [case] [png_dir]
 // BP_MODELS=DIR takes the nets from DIR (BP_SMEAR=0.5 routes smeared patches to its
 // smeared_ball_net too); BP_TEXTURE=... and the others below override parameters.
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <numbers>
 #include <string>
 
 #include "colorfree/groundtruth/field_markings.h"
@@ -63,6 +65,8 @@ int probe(int argc, char** argv) {
   if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
   if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
   env("BP_SMEAR", config.ball_detector.smeared_min_coherence);
+  env("BP_CAMSMEAR", config.ball_detector.smeared_min_camera_smear_radii);
+  env("BP_SMEARDIR", config.ball_detector.smeared_max_direction_deg);
   env("BP_PATCHD", config.ball_detector.patch_diameters);
   env("BP_UP", config.ball_detector.rescale_up);
   env("BP_DOWN", config.ball_detector.rescale_down);
@@ -87,11 +91,13 @@ int probe(int argc, char** argv) {
       pipeline.process(frame, nullptr, &tracks);
       const BallInImage& b = truth.ball;
       const bool demand = truth.ball_present && b.in_view && b.should_detect;
-      std::printf("case %d %s frame %d: ball %s c=(%.1f,%.1f) r=%.1f vis=%.2f d=%.2f%s\n", c,
-                  runner.scenarioCase(c).name().c_str(), f.frame_index,
-                  truth.ball_present && b.in_view ? "in view" : "out", b.centre_px.x(),
-                  b.centre_px.y(), b.radius_px, b.visible_fraction, b.distance_m,
-                  demand ? " DEMANDED" : "");
+      std::printf(
+          "case %d %s frame %d: ball %s c=(%.1f,%.1f) r=%.1f vis=%.2f d=%.2f camera smear "
+          "(%.1f,%.1f)%s\n",
+          c, runner.scenarioCase(c).name().c_str(), f.frame_index,
+          truth.ball_present && b.in_view ? "in view" : "out", b.centre_px.x(), b.centre_px.y(),
+          b.radius_px, b.visible_fraction, b.distance_m, f.perception_camera.exposureSmearPx().x(),
+          f.perception_camera.exposureSmearPx().y(), demand ? " DEMANDED" : "");
       bool ph = false, dh = false;
       const auto& props = *frame.ball_proposals;
       for (std::size_t i = 0; i < props.size(); ++i) {
@@ -109,7 +115,21 @@ int probe(int argc, char** argv) {
                     i, p.centre_px.x(), p.centre_px.y(), p.radius_px, p.response,
                     (p.centre_px - b.centre_px).norm(), m ? " MATCH" : "", d.boost_confidence,
                     d.ball_confidence);
-        if (d.smear >= 0) std::printf(" smear=%.2f smeared=%.3f", d.smear, d.smeared_confidence);
+        if (d.smear >= 0) {
+          // The patch's smear direction against the camera's own smear (undirected, degrees), and
+          // the camera's smear in radii.
+          Eigen::Vector2d along = Eigen::Vector2d::UnitX();
+          patchSmear(f.image.view(),
+                     ballPatchBox(p.centre_px, p.radius_px, config.ball_detector.patch_diameters),
+                     &along);
+          const Eigen::Vector2d cam = f.perception_camera.exposureSmearPx();
+          const double angle =
+              cam.norm() > 0
+                  ? std::acos(std::min(1.0, std::abs(along.dot(cam)) / cam.norm())) * 180 / std::numbers::pi
+                  : -1;
+          std::printf(" smear=%.2f smeared=%.3f camsmear=%.2fr dir=%.0f", d.smear,
+                      d.smeared_confidence, cam.norm() / p.radius_px, angle);
+        }
         if (d.sharpened_confidence >= 0) std::printf(" sharp=%.3f", d.sharpened_confidence);
         std::printf("\n");
         // Every bit of the proposal (a speedup must leave them as they were).
