@@ -26,18 +26,17 @@ struct BallDetectorParams {
   double max_centre_outside_radii = 0.25;
   /// A kept proposal BallNet rejects whose patch lies inside the image and is at least this
   /// elongated (`patchSmear`: a ball smeared by the camera's motion) goes to SmearedBallNet too,
-  /// which may accept it. Above 1: never (SmearedBallNet is not loaded): the shipped file's
-  /// choice, for the false positives it adds (README ball12); 0.5 switches it on.
-  double smeared_min_coherence = 2;
-  double smeared_ball_min_confidence = 0.5;  ///< SmearedBallNet's "ball" score for a detection
+  /// which may accept it. Above 1: never (SmearedBallNet is not loaded).
+  double smeared_min_coherence = 0.5;
+  double smeared_ball_min_confidence = 0.9;  ///< SmearedBallNet's "ball" score for a detection
   /// ... and only for proposals of at least this radius: the smeared balls it learnt from are
   /// 0.8-1.7 m away (radius 10 px and more); a far ball's few pixels are BallNet's alone.
   double smeared_min_radius_px = 10;
   /// ... and only where the camera's own turn smeared the frame (`CameraModel::exposureSmearPx`,
   /// from the robot's kinematics) by at least this many of the proposal's radii (0: whatever it
   /// did), along a direction within smeared_max_direction_deg of the patch's smear (90: any).
-  double smeared_min_camera_smear_radii = 0;
-  double smeared_max_direction_deg = 90;
+  double smeared_min_camera_smear_radii = 0.5;
+  double smeared_max_direction_deg = 30;
   /// A ball SmearedBallNet accepts is put at the middle of its smear (`smearedBallCentre`), looked
   /// for up to this many radii either side of the proposal along the smear ...
   double smeared_centre_reach_radii = 3;
