@@ -210,7 +210,8 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
       if (radius < params_.smeared_min_radius_px) continue;
       if (camera_smear.norm() < params_.smeared_min_camera_smear_radii * radius) continue;
       smear[k] = static_cast<float>(patchSmear(image, kept_boxes[k], &along[k]));
-      // (an undirected angle: the smear's direction has no sign)
+      // (an undirected angle: the smear's direction has no sign; a still camera has none, so a
+      // zero smear, let through by a bound of 0, passes any direction)
       const bool along_camera =
           params_.smeared_max_direction_deg >= 90 ||
           std::abs(along[k].dot(camera_smear)) >= cos_max_direction * camera_smear.norm();

@@ -21,6 +21,7 @@ ExposurePlan::ExposurePlan(const EffectsSpec& effects, int height_px) {
   if (height_px <= 0) throw Error("exposure plan: image height must be positive");
   const bool blur = effects.blur_subframes > 1 && effects.exposure_s > 0;
   const double exposure = blur ? effects.exposure_s : 0.0;
+  exposure_s_ = exposure;
   const double readout = effects.rolling_shutter ? effects.readout_s : 0.0;
   const double span = exposure + readout;
   rows_.resize(static_cast<std::size_t>(height_px));

@@ -196,9 +196,7 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
     // The sub-frames span the exposure and the rolling shutter's readout: the exposure alone is
     // exposure / spacing steps (none without blur, where the sub-frames are readout bands).
     const std::vector<double>& times = plan.subframeTimes();
-    const bool blur = settings.effects.blur_subframes > 1 && settings.effects.exposure_s > 0;
-    if (blur && times.size() > 1)
-      exposure_smear = step * (settings.effects.exposure_s / (times[1] - times[0]));
+    if (times.size() > 1) exposure_smear = step * (plan.exposureS() / (times[1] - times[0]));
     // The truth and the object map are at the frame time (the middle of the exposure).
     setSceneAt(renderer, settings, frame_index, t);
     if (object_map)

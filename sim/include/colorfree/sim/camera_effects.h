@@ -37,8 +37,11 @@ class ExposurePlan {
   int height() const { return static_cast<int>(rows_.size()); }
   /// True when a single render at the frame time is the whole exposure.
   bool isInstant() const { return times_s_.size() == 1 && times_s_[0] == 0.0; }
+  /// E, the time one row is exposed (0 without motion blur), seconds.
+  double exposureS() const { return exposure_s_; }
 
  private:
+  double exposure_s_ = 0;
   std::vector<double> times_s_;
   std::vector<std::vector<std::pair<int, float>>> rows_;
 };
