@@ -87,6 +87,19 @@ void CameraModel::setExposureSmearPx(const Eigen::Vector2d& smear_px) {
   exposure_smear_px_ = smear_px;
 }
 
+void CameraModel::setRollingShutterShiftPx(const Eigen::Vector2d& shift_px) {
+  if (!shift_px.allFinite() || shift_px.cwiseAbs().maxCoeff() > kMaxSmearPx) {
+    throw Error("camera model: rolling shutter shift must be finite and within 10000 px");
+  }
+  rolling_shutter_shift_px_ = shift_px;
+}
+
+Eigen::Vector2d CameraModel::atFrameTime(const Eigen::Vector2d& pixel) const {
+  // Row y (centre y + 0.5 at pixel y) is read at (y / height - 0.5) of the readout from the frame's
+  // time.
+  return pixel - (pixel.y() / intrinsics_.height_px - 0.5) * rolling_shutter_shift_px_;
+}
+
 CameraModel CameraModel::load(const std::string& path) {
   ParamFile f(path);
   CameraIntrinsics k;
@@ -103,12 +116,15 @@ CameraModel CameraModel::load(const std::string& path) {
   p.roll_rad = f.getInRange("roll_deg", -180, 180) * kPi / 180;
   p.pitch_rad = f.getInRange("pitch_deg", -90, 90) * kPi / 180;
   p.yaw_rad = f.getInRange("yaw_deg", -180, 180) * kPi / 180;
-  // Optional: the camera's own smear over the exposure (zero when absent).
-  Eigen::Vector2d smear = Eigen::Vector2d::Zero();
-  if (f.has("exposure_smear_x_px") || f.has("exposure_smear_y_px")) {
-    smear = {f.getInRange("exposure_smear_x_px", -kMaxSmearPx, kMaxSmearPx),
-             f.getInRange("exposure_smear_y_px", -kMaxSmearPx, kMaxSmearPx)};
-  }
+  // Optional pairs (zero when absent): the camera's own smear over the exposure and its shift
+  // over a rolling shutter's readout.
+  const auto optionalPair = [&](const std::string& x, const std::string& y) {
+    if (!f.has(x) && !f.has(y)) return Eigen::Vector2d::Zero().eval();
+    return Eigen::Vector2d(f.getInRange(x, -kMaxSmearPx, kMaxSmearPx),
+                           f.getInRange(y, -kMaxSmearPx, kMaxSmearPx));
+  };
+  const Eigen::Vector2d smear = optionalPair("exposure_smear_x_px", "exposure_smear_y_px");
+  const Eigen::Vector2d shift = optionalPair("rolling_shift_x_px", "rolling_shift_y_px");
   f.finish();
   CameraModel m;
   m.intrinsics_ = k;
@@ -116,6 +132,7 @@ CameraModel CameraModel::load(const std::string& path) {
   m.validate(path);
   m.robot_to_camera_ = m.camera_to_robot_.inverse();
   m.exposure_smear_px_ = smear;
+  m.rolling_shutter_shift_px_ = shift;
   return m;
 }
 
@@ -143,6 +160,10 @@ void CameraModel::save(const std::string& path) const {
   if (!exposure_smear_px_.isZero(0)) {
     out << YAML::Key << "exposure_smear_x_px" << YAML::Value << exposure_smear_px_.x();
     out << YAML::Key << "exposure_smear_y_px" << YAML::Value << exposure_smear_px_.y();
+  }
+  if (!rolling_shutter_shift_px_.isZero(0)) {
+    out << YAML::Key << "rolling_shift_x_px" << YAML::Value << rolling_shutter_shift_px_.x();
+    out << YAML::Key << "rolling_shift_y_px" << YAML::Value << rolling_shutter_shift_px_.y();
   }
   out << YAML::EndMap;
   std::ofstream file(path);

@@ -23,6 +23,7 @@ ExposurePlan::ExposurePlan(const EffectsSpec& effects, int height_px) {
   const double exposure = blur ? effects.exposure_s : 0.0;
   exposure_s_ = exposure;
   const double readout = effects.rolling_shutter ? effects.readout_s : 0.0;
+  readout_s_ = readout;
   const double span = exposure + readout;
   rows_.resize(static_cast<std::size_t>(height_px));
   if (span <= 0) {

@@ -173,8 +173,8 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
   frame.truth = scenarioStateAt(settings, frame_index);
 
   FloatImage exposure;
-  // The camera's own turn over the exposure, in the image.
-  Eigen::Vector2d exposure_smear = Eigen::Vector2d::Zero();
+  // The camera's own turn over the exposure and over the rolling shutter's readout, in the image.
+  Eigen::Vector2d exposure_smear = Eigen::Vector2d::Zero(), rolling_shift = Eigen::Vector2d::Zero();
   if (plan.isInstant()) {
     setSceneAt(renderer, settings, frame_index, t);
     RenderOutput out = renderer.render(settings.camera, w, h, object_map);
@@ -196,7 +196,10 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
     // The sub-frames span the exposure and the rolling shutter's readout: the exposure alone is
     // exposure / spacing steps (none without blur, where the sub-frames are readout bands).
     const std::vector<double>& times = plan.subframeTimes();
-    if (times.size() > 1) exposure_smear = step * (plan.exposureS() / (times[1] - times[0]));
+    if (times.size() > 1) {
+      exposure_smear = step * (plan.exposureS() / (times[1] - times[0]));
+      rolling_shift = step * (plan.readoutS() / (times[1] - times[0]));
+    }
     // The truth and the object map are at the frame time (the middle of the exposure).
     setSceneAt(renderer, settings, frame_index, t);
     if (object_map)
@@ -207,6 +210,7 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
   frame.perception_camera = perceivedCamera(frame.truth.camera.model, settings.camera_error);
   // What the robot's kinematics would tell it (head joint velocities times the exposure time).
   frame.perception_camera.setExposureSmearPx(exposure_smear);
+  frame.perception_camera.setRollingShutterShiftPx(rolling_shift);
   exposure = applyOptics(std::move(exposure), settings.effects);
   frame.image = applySensor(exposure, settings.effects, frameSeed(settings.seed, frame_index));
   return frame;

@@ -225,6 +225,30 @@ TEST(RunnerTest, PerceptionCameraCarriesTheExposureSmearOfTheHeadsTurn) {
   EXPECT_NEAR(banded.x(), focal * turn, 0.03 * focal * turn);
 }
 
+// ... and the shift of a rolling shutter's readout: 16 ms of the same turn from the first row to
+// the last; none with a global shutter.
+TEST(RunnerTest, PerceptionCameraCarriesTheRollingShuttersShift) {
+  const auto shift = [](const std::string& effects) {
+    FakeLog log;
+    std::string text = scenario("effects: " + effects + "\n");
+    const std::string still = "head: {yaw_deg: 10}";
+    text.replace(text.find(still), still.size(),
+                 "head: {yaw_deg: 10, yaw_amplitude_deg: 20, yaw_period_s: 1}");
+    ScenarioRunner runner(Scenario::parse(text, "fake.yaml"), fakeFactory(log));
+    return runner.render(0, 0, false).perception_camera.rollingShutterShiftPx();
+  };
+  const double focal = 100 / std::tan(0.5);
+  const double turn =
+      2 * (20 * std::numbers::pi / 180) * std::sin(2 * std::numbers::pi * 0.008);  // over 16 ms
+  for (const std::string blur : {"", ", exposure_ms: 20, blur_subframes: 4"}) {
+    const Eigen::Vector2d s =
+        shift("{rolling_shutter: true, readout_ms: 16, rolling_shutter_bands: 16" + blur + "}");
+    EXPECT_NEAR(s.x(), focal * turn, 0.03 * focal * turn) << blur;
+    EXPECT_NEAR(s.y(), 0, 0.05) << blur;
+  }
+  EXPECT_TRUE(shift("{exposure_ms: 20, blur_subframes: 4}").isZero(0));
+}
+
 TEST(RunnerTest, RollingShutterSkewsAMovingBall) {
   FakeLog log;
   ScenarioRunner runner(Scenario::parse(scenario("effects: {rolling_shutter: true, readout_ms: 16, "

@@ -191,7 +191,27 @@ TEST(CameraModel, FileRoundTrip) {
   turning.setExposureSmearPx({12.5, -3.25});
   turning.save(path);
   EXPECT_EQ(CameraModel::load(path).exposureSmearPx(), Eigen::Vector2d(12.5, -3.25));
+  EXPECT_TRUE(CameraModel::load(path).rollingShutterShiftPx().isZero(0));
+  turning.setRollingShutterShiftPx({-20, 4.5});
+  turning.save(path);
+  EXPECT_EQ(CameraModel::load(path).rollingShutterShiftPx(), Eigen::Vector2d(-20, 4.5));
   std::filesystem::remove(path);
+}
+
+// A rolling shutter read the top row half the readout before the frame's time and the bottom row
+// half after: a point seen there is put back by half the shift either way, the middle row stays.
+TEST(CameraModel, AtFrameTimeTakesOutTheRowsShareOfTheRollingShutterShift) {
+  CameraModel cam = naoTopCamera(22, -35, 3);
+  const Eigen::Vector2d p(100.25, 37.5);
+  EXPECT_EQ(cam.atFrameTime(p), p);  // no shift given
+  cam.setRollingShutterShiftPx({30, -8});
+  const double h = cam.height();
+  EXPECT_TRUE(cam.atFrameTime({100, 0.5 * h}).isApprox(Eigen::Vector2d(100, 0.5 * h), 1e-12));
+  EXPECT_TRUE(cam.atFrameTime({100, 0}).isApprox(Eigen::Vector2d(115, -4), 1e-12));
+  EXPECT_TRUE(cam.atFrameTime({100, h}).isApprox(Eigen::Vector2d(85, h + 4), 1e-12));
+  EXPECT_TRUE(
+      cam.atFrameTime({100, 0.25 * h}).isApprox(Eigen::Vector2d(107.5, 0.25 * h - 2), 1e-12));
+  EXPECT_THROW(cam.setRollingShutterShiftPx({0, std::nan("")}), Error);
 }
 
 TEST(CameraModel, ExposureSmearKeysComeInPairsWithinBounds) {
@@ -213,6 +233,7 @@ TEST(CameraModel, ExposureSmearKeysComeInPairsWithinBounds) {
     return false;
   };
   EXPECT_TRUE(fails("exposure_smear_x_px: 4\n", "exposure_smear_y_px"));  // one of the pair
+  EXPECT_TRUE(fails("rolling_shift_y_px: 4\n", "rolling_shift_x_px"));
   EXPECT_TRUE(fails("exposure_smear_x_px: 4\nexposure_smear_y_px: .nan\n", "exposure_smear_y_px"));
   EXPECT_TRUE(fails("exposure_smear_x_px: 1e6\nexposure_smear_y_px: 0\n", "exposure_smear_x_px"));
   EXPECT_FALSE(fails("exposure_smear_x_px: -4\nexposure_smear_y_px: 1.5\n", "exposure_smear"));

@@ -83,6 +83,17 @@ class CameraModel {
   const Eigen::Vector2d& exposureSmearPx() const { return exposure_smear_px_; }
   /// Throws colorfree::Error when a component is not finite or beyond 10,000 px.
   void setExposureSmearPx(const Eigen::Vector2d& smear_px);
+  /// A rolling shutter reads the rows one after the other: how far the still scene moved in the
+  /// image from the first row's reading to the last's, from the camera's own turn (pixels; zero
+  /// for a global shutter, a still camera or when not known). The frame's time is the middle
+  /// row's. A team gets it as the exposure smear, with the readout time for the exposure time.
+  const Eigen::Vector2d& rollingShutterShiftPx() const { return rolling_shutter_shift_px_; }
+  /// Throws colorfree::Error when a component is not finite or beyond 10,000 px.
+  void setRollingShutterShiftPx(const Eigen::Vector2d& shift_px);
+  /// Where a still point seen at `pixel` would have been seen at the frame's time: `pixel` less
+  /// the shift the rows between the middle one and its own were read over (the pixel itself
+  /// without a rolling-shutter shift).
+  Eigen::Vector2d atFrameTime(const Eigen::Vector2d& pixel) const;
 
  private:
   void validate(const std::string& origin) const;
@@ -91,6 +102,7 @@ class CameraModel {
   Eigen::Isometry3d camera_to_robot_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d robot_to_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Vector2d exposure_smear_px_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d rolling_shutter_shift_px_ = Eigen::Vector2d::Zero();
 };
 
 /// Rotation from the optical frame (x right, y down, z forward) to a body frame (x forward,

@@ -39,9 +39,12 @@ class ExposurePlan {
   bool isInstant() const { return times_s_.size() == 1 && times_s_[0] == 0.0; }
   /// E, the time one row is exposed (0 without motion blur), seconds.
   double exposureS() const { return exposure_s_; }
+  /// The time from the first row's exposure to the last's (0 with a global shutter), seconds.
+  double readoutS() const { return readout_s_; }
 
  private:
   double exposure_s_ = 0;
+  double readout_s_ = 0;
   std::vector<double> times_s_;
   std::vector<std::vector<std::pair<int, float>>> rows_;
 };
