@@ -315,7 +315,8 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     if (static_cast<int>(out.size()) >= params_.max_balls) break;
     all[i].detected = true;
     BallPercept b;
-    b.centre_px = smeared_centre[i].value_or(proposals[i].centre_px);
+    // (where it was at the frame's time: a rolling shutter read its row earlier or later)
+    b.centre_px = camera.atFrameTime(smeared_centre[i].value_or(proposals[i].centre_px));
     b.radius_px = proposals[i].radius_px * radius_scale[i];
     b.confidence = conf;
     b.position_in_robot = camera.pixelToGround(b.centre_px, params_.ball_radius_m);

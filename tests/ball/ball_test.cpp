@@ -624,6 +624,30 @@ TEST(BallDetector, SmearedBallNetOnlyWhereTheCameraTurnedAlongTheSmear) {
   EXPECT_THROW(cam.setExposureSmearPx({std::nan(""), 0}), Error);
 }
 
+// A rolling shutter read the ball's row before or after the frame's time while the camera turned:
+// the percept is put where the ball was at the frame's time (CameraModel::atFrameTime), its ground
+// position from there; without a shift it stays where the image shows it.
+TEST(BallDetector, BallIsPlacedAtTheFramesTimeUnderARollingShutter) {
+  CameraModel cam = test::testCamera(22);
+  GrayImage image = test::renderScene(cam, carpetOnly(5));
+  const test::DrawnBall b = test::drawBall(image, cam, {1.5, -0.1});
+  const std::vector<BallProposal> props = {{b.centre_px, b.radius_px, 1}};
+  const BallDetector detector = BallDetector::load(BallDetectorParams::loadDefault());
+  const std::vector<BallPercept> still = detector.run(image.view(), cam, props);
+  ASSERT_EQ(still.size(), 1u);
+  EXPECT_EQ(still[0].centre_px, b.centre_px);
+  cam.setRollingShutterShiftPx({24, -6});
+  const std::vector<BallPercept> shifted = detector.run(image.view(), cam, props);
+  ASSERT_EQ(shifted.size(), 1u);
+  const double share = b.centre_px.y() / cam.height() - 0.5;
+  ASSERT_GT(std::abs(share), 0.05);  // the drawn ball's row is not the middle one
+  EXPECT_TRUE(shifted[0].centre_px.isApprox(b.centre_px - share * Eigen::Vector2d(24, -6), 1e-9));
+  ASSERT_TRUE(shifted[0].position_in_robot.has_value());
+  EXPECT_TRUE(
+      shifted[0].position_in_robot->isApprox(*cam.pixelToGround(shifted[0].centre_px, 0.05), 1e-9));
+  EXPECT_GT((*shifted[0].position_in_robot - *still[0].position_in_robot).norm(), 0.005);
+}
+
 // A soft lens: the frame blurred by a Gaussian of `sigma` pixels (the border repeated).
 GrayImage defocused(const GrayImage& in, double sigma) {
   const int reach = static_cast<int>(std::ceil(3 * sigma));
