@@ -45,8 +45,8 @@ struct BallProposal {
 
 /// A detected ball.
 struct BallPercept {
-  /// In the image at the frame's time: where a rolling shutter read the ball's row earlier or later
-  /// while the camera turned (CameraModel::rollingShutterShiftPx), that share of the shift is taken out.
+  /// In the image at the frame's time: where a rolling shutter read the ball's row early or late
+  /// while the camera turned (CameraModel::rollingShutterShiftPx), that share of the shift is out.
   Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
   double radius_px = 0;
   double confidence = 0;                          ///< classifier output in [0, 1]
