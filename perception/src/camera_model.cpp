@@ -80,23 +80,27 @@ void CameraModel::validate(const std::string& origin) const {
   }
 }
 
-void CameraModel::setExposureSmearPx(const Eigen::Vector2d& smear_px) {
-  if (!smear_px.allFinite() || smear_px.cwiseAbs().maxCoeff() > kMaxSmearPx) {
-    throw Error("camera model: exposure smear must be finite and within 10000 px");
+namespace {
+// A camera-motion shift in pixels, checked; `what` names it in the error.
+Eigen::Vector2d checkedShiftPx(const Eigen::Vector2d& shift_px, const std::string& what) {
+  if (!shift_px.allFinite() || shift_px.cwiseAbs().maxCoeff() > kMaxSmearPx) {
+    throw Error("camera model: " + what + " must be finite and within 10000 px");
   }
-  exposure_smear_px_ = smear_px;
+  return shift_px;
+}
+}  // namespace
+
+void CameraModel::setExposureSmearPx(const Eigen::Vector2d& smear_px) {
+  exposure_smear_px_ = checkedShiftPx(smear_px, "exposure smear");
 }
 
 void CameraModel::setRollingShutterShiftPx(const Eigen::Vector2d& shift_px) {
-  if (!shift_px.allFinite() || shift_px.cwiseAbs().maxCoeff() > kMaxSmearPx) {
-    throw Error("camera model: rolling shutter shift must be finite and within 10000 px");
-  }
-  rolling_shutter_shift_px_ = shift_px;
+  rolling_shutter_shift_px_ = checkedShiftPx(shift_px, "rolling shutter shift");
 }
 
 Eigen::Vector2d CameraModel::atFrameTime(const Eigen::Vector2d& pixel) const {
-  // Row y (centre y + 0.5 at pixel y) is read at (y / height - 0.5) of the readout from the frame's
-  // time.
+  // Row r, whose pixels' centres lie at y = r + 0.5, is read (y / height - 0.5) of the readout
+  // after the frame's time (the middle row's).
   return pixel - (pixel.y() / intrinsics_.height_px - 0.5) * rolling_shutter_shift_px_;
 }
 

@@ -194,7 +194,8 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
     const Eigen::Vector2d step = meanSubframeStepPx(cameras);
     exposure = smearAlong(exposure, step.x(), step.y());
     // The sub-frames span the exposure and the rolling shutter's readout: the exposure alone is
-    // exposure / spacing steps (none without blur, where the sub-frames are readout bands).
+    // exposure / spacing steps (none without blur, where the sub-frames are readout bands), the
+    // readout readout / spacing (none with a global shutter).
     const std::vector<double>& times = plan.subframeTimes();
     if (times.size() > 1) {
       exposure_smear = step * (plan.exposureS() / (times[1] - times[0]));
@@ -208,7 +209,8 @@ RenderedFrame ScenarioRunner::render(int case_index, int frame_index, bool objec
   frame.truth.camera.model = renderer.cameraModel(settings.camera, w, h);
   frame.truth.camera.camera_to_field = renderer.cameraToField(settings.camera);
   frame.perception_camera = perceivedCamera(frame.truth.camera.model, settings.camera_error);
-  // What the robot's kinematics would tell it (head joint velocities times the exposure time).
+  // What the robot's kinematics would tell it (head joint velocities times the exposure and the
+  // readout times).
   frame.perception_camera.setExposureSmearPx(exposure_smear);
   frame.perception_camera.setRollingShutterShiftPx(rolling_shift);
   exposure = applyOptics(std::move(exposure), settings.effects);
