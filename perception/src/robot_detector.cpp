@@ -17,6 +17,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.max_overlap_iou = f.getInRange("max_overlap_iou", 0, 1);
   p.max_inside_fraction = f.getInRange("max_inside_fraction", 0, 1);
   p.min_held_back_confidence = f.getInRange("min_held_back_confidence", 0, 1);
+  p.min_wide_group_confidence = f.getInRange("min_wide_group_confidence", 0, 1);
   p.min_behind_robot_confidence = f.getInRange("min_behind_robot_confidence", 0, 1);
   p.behind_lower_part_fraction = f.getInRange("behind_lower_part_fraction", 0, 1);
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
@@ -335,13 +336,14 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   proposal_boxes.reserve(seen.size());
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
   // The boxes RobotNet accepted on their own bars (the others take no part in the choice): the
-  // proposals from min_confidence, held-back candidates behind boxes it rejected from
-  // min_held_back_confidence. (Boxes behind a robot are there only when every held-back
-  // candidate was classified, in held_back's order.)
+  // proposals from min_confidence (pieces of wide groups from min_wide_group_confidence), held-back
+  // candidates behind boxes it rejected from min_held_back_confidence. (Boxes behind a robot are
+  // there only when every held-back candidate was classified, in held_back's order.)
   std::vector<bool> on_own_bar(seen.size(), false);
   for (std::size_t i = 0; i < seen.size(); ++i) {
     if (i < proposals.size()) {
-      on_own_bar[i] = robot[i] >= params_.min_confidence;
+      on_own_bar[i] = robot[i] >= params_.min_confidence &&
+                      (!seen[i].wide_group || robot[i] >= params_.min_wide_group_confidence);
     } else if (!behind_robot[i - proposals.size()]) {
       on_own_bar[i] = robot[i] >= params_.min_held_back_confidence;
     }

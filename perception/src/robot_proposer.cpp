@@ -511,7 +511,6 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   struct Candidate {
     RobotProposal proposal;
     double expected_h;
-    bool wide_group;  ///< from a group wider than defer_width_factor robots: deferred under the cap
   };
   // Join feet points of neighbouring scan lines (sorted by x) into groups, and the groups wide
   // enough for a robot (knee_only: and holding a knee-bridged point) into candidates.
@@ -575,7 +574,8 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
         rp.box.x1 = x + bw / 2;
         rp.box.y1 = feet_y + p.box_below_feet_fraction * *h;
         rp.box.y0 = rp.box.y1 - p.box_height_factor * *h;
-        candidates.push_back({rp, *h, w > p.defer_width_factor * w_expected});
+        rp.wide_group = w > p.defer_width_factor * w_expected;
+        candidates.push_back({rp, *h});
       }
     }
     // Lower in the image first (nearer robots hide the ones behind).
@@ -641,7 +641,7 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   };
   // Free-standing candidates, then those behind a nearer one, then the boxes of wide groups.
   for (const Candidate& c : candidates) {
-    if (c.wide_group) {
+    if (c.proposal.wide_group) {
       wide.push_back(&c);
     } else {
       keep(c, true);

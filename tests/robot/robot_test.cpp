@@ -346,10 +346,17 @@ TEST(RobotProposer, BoxesOfAWideGroupComeAfterAFarRobotUnderTheCap) {
   const RobotProposer proposer(params, FieldDimensions::loadDefault());
   const RobotProposals uncapped = proposer.run(img.view(), cam, all, regions, true);
   ASSERT_GE(uncapped.proposals.size(), 3u) << describe(uncapped);  // the band's boxes and the robot
+  // The band's boxes are marked as a wide group's pieces (the detector's higher bar), the robot
+  // not.
+  const double far_h = robotSizePx(cam, far_feet).h;
+  for (const RobotProposal& p : uncapped.proposals) {
+    const bool on_band = std::abs(p.feet_px.y() - band_feet.y()) <= 2;
+    EXPECT_EQ(p.wide_group, on_band) << p.feet_px.transpose() << describe(uncapped);
+  }
   params.max_proposals = 1;
   const RobotProposals capped =
       RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
-  const double h = robotSizePx(cam, far_feet).h;
+  const double h = far_h;
   EXPECT_TRUE(proposedAt(capped, far_feet, h)) << "far feet " << far_feet.transpose() << describe(capped);
   params.defer_width_factor = 100;  // no deferral: the lower band takes the place
   const RobotProposals undeferred =
@@ -758,6 +765,30 @@ TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) 
   EXPECT_THROW(
       detector.run(img.view(), cam, {carpet_box}, {{behind, {1}}}, &classified, &confidences),
       Error);
+}
+
+TEST(RobotDetector, APieceOfAWideGroupNeedsItsOwnBar) {
+  // RobotNet's robot probability between min_confidence and min_wide_group_confidence: a percept
+  // as a robot's own proposal, none as a piece of a wide row of feet points; a sure one is both.
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(100, 300), cv::Point(170, 430), cv::Scalar(130), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(400, 100), cv::Point(460, 220), cv::Scalar(230), cv::FILLED);
+  const CameraModel cam = testCamera();
+  RobotProposal unsure = proposal(pixelBox(105, 305, 165, 425));
+  RobotProposal sure = proposal(pixelBox(395, 95, 465, 225));
+  const RobotDetector detector = brightnessDetector();
+  std::vector<RobotProposal> classified;
+  std::vector<float> confidences;
+  auto robots = detector.run(img.view(), cam, {unsure, sure}, {}, &classified, &confidences);
+  ASSERT_EQ(confidences.size(), 2u);
+  ASSERT_GT(confidences[0], 0.5f);
+  ASSERT_LT(confidences[0], 0.9f);
+  ASSERT_GT(confidences[1], 0.9f);
+  EXPECT_EQ(robots.size(), 2u);
+  unsure.wide_group = sure.wide_group = true;
+  robots = detector.run(img.view(), cam, {unsure, sure}, {}, &classified, &confidences);
+  ASSERT_EQ(robots.size(), 1u);
+  EXPECT_EQ(robots[0].box.x0, sure.box.x0);
 }
 
 TEST(RobotDetector, ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOtherBox) {

@@ -57,6 +57,10 @@ struct BallPercept {
 struct RobotProposal {
   PixelBox box;
   Eigen::Vector2d feet_px = Eigen::Vector2d::Zero();  ///< the robot's ground point in the image
+  /// A piece of a row of feet points wider than several robots (a field line or the field's edge
+  /// with whatever stands behind it above, split into robot-wide boxes; the proposer's
+  /// defer_width_factor): placed by the split, not by a robot's feet.
+  bool wide_group = false;
 };
 
 /// Whether a robot candidate's feet point lies in the lower part of a nearer robot's box: in its

@@ -22,6 +22,9 @@ struct RobotDetectorParams {
   /// A held-back candidate's patch holds parts of the nearer boxes RobotNet rejected, which may
   /// be a robot RobotNet missed: it becomes a percept only at this robot probability or more.
   double min_held_back_confidence = 0.7;
+  /// A proposal from a wide row of feet points (RobotProposal::wide_group: mostly a field line
+  /// with the background above it) becomes a percept only at this robot probability or more.
+  double min_wide_group_confidence = 0.9;
   /// A held-back candidate behind a nearer box RobotNet accepted is a robot standing behind that
   /// one (its feet at the nearer robot's knees or hands in the image), or the nearer robot's own
   /// knee, crotch or hand. It is classified too and takes part in the choice of percepts at this

@@ -98,7 +98,7 @@ struct RobotProposerParams {
   /// detector classifies it only when RobotNet finds no robot in any such nearer box.
   double own_body_height_fraction = 0.4;
   double max_overlap_iou = 0.45;  ///< of two proposals overlapping more, the one lower in the image stays
-  int max_proposals = 12;
+  int max_proposals = 16;
   int max_held_back = 6;  ///< candidates held back behind nearer proposals, at most
 
   bool operator==(const RobotProposerParams&) const = default;
