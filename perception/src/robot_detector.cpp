@@ -38,12 +38,23 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.feet_min_confidence = f.getInRange("feet_min_confidence", 0.5, 1);  // one class at most
   p.feet_step_height_fraction = f.getInRange("feet_step_height_fraction", 0.01, 0.5);
   p.feet_max_steps = static_cast<int>(f.getInRange("feet_max_steps", 0, 10));
+  p.feet_to_centre_m = f.getInRange("feet_to_centre_m", 0, 0.3);
   f.finish();
   return p;
 }
 
 RobotDetectorParams RobotDetectorParams::loadDefault() {
   return load(defaultParamDir() + "/robot_detector.yaml");
+}
+
+std::optional<Eigen::Vector2d> robotGroundPoint(const CameraModel& camera,
+                                                const Eigen::Vector2d& feet_px,
+                                                double feet_to_centre_m) {
+  const auto g = camera.pixelToGround(feet_px);
+  if (!g) return std::nullopt;
+  const Eigen::Vector2d los = *g - camera.position().head<2>();
+  const double d = los.norm();
+  return d > 0 ? Eigen::Vector2d(*g + feet_to_centre_m / d * los) : *g;
 }
 
 cnn::PatchBox robotPatchBox(const RobotProposal& proposal) {
@@ -232,7 +243,7 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
   out.box.x1 = cx + 0.5 * k * b.width();
   out.box.y1 = new_feet_y + k * (b.y1 - percept.feet_px.y());
   out.box.y0 = out.box.y1 - k * b.height();
-  out.position_in_robot = camera.pixelToGround(out.feet_px);
+  out.position_in_robot = robotGroundPoint(camera, out.feet_px, params.feet_to_centre_m);
   return out;
 }
 
@@ -418,7 +429,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     r.box = p.box;
     r.feet_px = p.feet_px;
     r.confidence = robot[i];
-    r.position_in_robot = camera.pixelToGround(p.feet_px);
+    r.position_in_robot = robotGroundPoint(camera, p.feet_px, params_.feet_to_centre_m);
     // Its legs below a backlit knee: the feet at the shins.
     if (auto lowered = feetOnShins(image, camera, r, params_, field_)) r = *lowered;
     out.push_back(r);

@@ -791,6 +791,31 @@ TEST(RobotDetector, APieceOfAWideGroupNeedsItsOwnBar) {
   EXPECT_EQ(robots[0].box.x0, sure.box.x0);
 }
 
+TEST(RobotDetector, TheRobotsGroundPointLiesBeyondItsFeetAlongTheLineOfSight) {
+  // The feet point is the nearest edge of the feet; the robot stands feet_to_centre_m beyond it,
+  // on the same bearing from the camera.
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(400, 100), cv::Point(460, 220), cv::Scalar(230), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const RobotProposal sure = proposal(pixelBox(395, 95, 465, 225));
+  RobotDetectorParams params;
+  params.feet_max_steps = 0;
+  params.shin_gap_height_fraction = 0;
+  const auto feet_ground = cam.pixelToGround(sure.feet_px);
+  ASSERT_TRUE(feet_ground.has_value());
+  const Eigen::Vector2d from_camera = *feet_ground - cam.position().head<2>();
+  for (const double beyond_m : {0.0, 0.07, 0.2}) {
+    params.feet_to_centre_m = beyond_m;
+    const auto robots = brightnessDetector(params).run(img.view(), cam, {sure});
+    ASSERT_EQ(robots.size(), 1u);
+    ASSERT_TRUE(robots[0].position_in_robot.has_value());
+    const Eigen::Vector2d got = *robots[0].position_in_robot - cam.position().head<2>();
+    EXPECT_NEAR(got.norm(), from_camera.norm() + beyond_m, 1e-9) << beyond_m;
+    EXPECT_NEAR(std::atan2(got.y(), got.x()), std::atan2(from_camera.y(), from_camera.x()), 1e-9);
+  }
+  EXPECT_FALSE(robotGroundPoint(cam, {320, 0}, 0.07).has_value());  // above the horizon
+}
+
 TEST(RobotDetector, ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOtherBox) {
   GrayImage img = carpet(11);
   cv::rectangle(wrap(img), cv::Point(300, 60), cv::Point(620, 300), cv::Scalar(200), cv::FILLED);

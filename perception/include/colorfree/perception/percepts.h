@@ -97,7 +97,8 @@ struct RobotPercept {
   PixelBox box;
   Eigen::Vector2d feet_px = Eigen::Vector2d::Zero();
   double confidence = 0;
-  std::optional<Eigen::Vector2d> position_in_robot;  ///< ground point, robot frame
+  /// The robot's ground point (between its feet), robot frame (see robotGroundPoint).
+  std::optional<Eigen::Vector2d> position_in_robot;
   std::optional<RobotOrientation> orientation_raw;       ///< this frame's estimate
   std::optional<RobotOrientation> orientation_filtered;  ///< after the circular median filter
   int track_id = -1;  ///< association over frames, -1 when not tracked

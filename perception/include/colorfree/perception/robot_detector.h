@@ -80,6 +80,9 @@ struct RobotDetectorParams {
   double feet_min_confidence = 0.6;
   double feet_step_height_fraction = 0.05;
   int feet_max_steps = 6;
+  /// The robot's ground point (between its feet: the pose's position) lies this far beyond its
+  /// feet point, the nearest edge of its feet in the image, along the line of sight (m).
+  double feet_to_centre_m = 0.07;
 
   bool operator==(const RobotDetectorParams&) const = default;
   static RobotDetectorParams load(const std::string& path);
@@ -98,6 +101,12 @@ std::vector<int> keptRobotBoxes(const std::vector<PixelBox>& boxes,
 
 /// The proposal box as RobotNet's patch.
 cnn::PatchBox robotPatchBox(const RobotProposal& proposal);
+
+/// A robot's ground point in the robot frame: the feet point's on the ground, moved
+/// `feet_to_centre_m` farther from the camera. Empty above the horizon.
+std::optional<Eigen::Vector2d> robotGroundPoint(const CameraModel& camera,
+                                                const Eigen::Vector2d& feet_px,
+                                                double feet_to_centre_m);
 
 /// The percept moved down to its shins when a robot's legs stand below its feet point, a knee's gap
 /// away (see shin_gap_height_fraction): the feet at the shins' median lower end, the box scaled by
