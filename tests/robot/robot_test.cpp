@@ -356,12 +356,12 @@ TEST(RobotProposer, BoxesOfAWideGroupComeAfterAFarRobotUnderTheCap) {
   params.max_proposals = 1;
   const RobotProposals capped =
       RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
-  const double h = far_h;
-  EXPECT_TRUE(proposedAt(capped, far_feet, h)) << "far feet " << far_feet.transpose() << describe(capped);
+  EXPECT_TRUE(proposedAt(capped, far_feet, far_h))
+      << "far feet " << far_feet.transpose() << describe(capped);
   params.defer_width_factor = 100;  // no deferral: the lower band takes the place
   const RobotProposals undeferred =
       RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions, true);
-  EXPECT_FALSE(proposedAt(undeferred, far_feet, h)) << describe(undeferred);
+  EXPECT_FALSE(proposedAt(undeferred, far_feet, far_h)) << describe(undeferred);
 }
 
 TEST(RobotProposer, FarRobotInTheUpperPartOfANearerBoxIsKept) {
