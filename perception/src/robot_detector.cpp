@@ -1,6 +1,7 @@
 #include "colorfree/perception/robot_detector.h"
 
 #include <algorithm>
+#include <iterator>
 #include <numeric>
 
 #include "colorfree/perception/cnn/patch.h"
@@ -18,6 +19,8 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.max_inside_fraction = f.getInRange("max_inside_fraction", 0, 1);
   p.min_held_back_confidence = f.getInRange("min_held_back_confidence", 0, 1);
   p.min_wide_group_confidence = f.getInRange("min_wide_group_confidence", 0, 1);
+  p.wide_group_shift_width_fraction = f.getInRange("wide_group_shift_width_fraction", 0, 1);
+  p.wide_group_min_shift_confidence = f.getInRange("wide_group_min_shift_confidence", 0, 1);
   p.min_behind_robot_confidence = f.getInRange("min_behind_robot_confidence", 0, 1);
   p.behind_lower_part_fraction = f.getInRange("behind_lower_part_fraction", 0, 1);
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
@@ -110,6 +113,52 @@ bool insideRows(const PixelBox& box, const GrayView& image) {
 }
 
 }  // namespace
+
+void RobotDetector::shiftWidePieces(const GrayView& image, std::vector<RobotProposal>& boxes,
+                                    std::size_t count, std::vector<float>& robot,
+                                    std::vector<float>& patches) const {
+  const double f = params_.wide_group_shift_width_fraction;
+  if (f <= 0) return;
+  constexpr double kSteps[] = {-2, -1, 1, 2};
+  constexpr std::size_t kLooks = std::size(kSteps);
+  std::vector<std::size_t> which;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (boxes[i].wide_group && robot[i] >= params_.wide_group_min_shift_confidence &&
+        robot[i] < params_.min_wide_group_confidence) {
+      which.push_back(i);
+    }
+  }
+  if (which.empty()) return;
+  const cnn::Shape& in = net_.input();
+  const std::size_t n = static_cast<std::size_t>(in.size());
+  std::vector<RobotProposal> moved;
+  moved.reserve(which.size() * kLooks);
+  for (std::size_t i : which) {
+    for (const double step : kSteps) {
+      RobotProposal m = boxes[i];
+      const double dx = step * f * m.box.width();
+      m.box.x0 += dx;
+      m.box.x1 += dx;
+      m.feet_px.x() += dx;
+      moved.push_back(m);
+    }
+  }
+  std::vector<float> inputs(moved.size() * n), probs(moved.size() * 2);
+  for (std::size_t j = 0; j < moved.size(); ++j) {
+    cnn::extractPatch(image, robotPatchBox(moved[j]), in.width, in.height,
+                      net_.net().normalization(), inputs.data() + j * n);
+  }
+  net_.run(inputs.data(), static_cast<int>(moved.size()), probs.data());
+  for (std::size_t w = 0; w < which.size(); ++w) {
+    const std::size_t i = which[w];
+    for (std::size_t j = w * kLooks; j < (w + 1) * kLooks; ++j) {
+      if (probs[2 * j + 1] <= robot[i]) continue;
+      boxes[i] = moved[j];
+      robot[i] = probs[2 * j + 1];
+      std::copy_n(inputs.data() + j * n, n, patches.data() + i * n);
+    }
+  }
+}
 
 void RobotDetector::moveFeet(const GrayView& image, const CameraModel& camera,
                              std::vector<RobotProposal>& boxes, const std::vector<int>& which,
@@ -325,6 +374,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     for (const HeldBackRobotProposal& h : held_back) seen.push_back(h.proposal);
   }
   classify(0);
+  shiftWidePieces(image, seen, proposals.size(), robot, patches);
   // Per classified held-back candidate: whether a nearer box it stands behind holds a robot.
   std::vector<bool> behind_robot;
   for (const HeldBackRobotProposal& h : held_back) {

@@ -98,6 +98,12 @@ int probe(int argc, char** argv) {
           truth.ball_present && b.in_view ? "in view" : "out", b.centre_px.x(), b.centre_px.y(),
           b.radius_px, b.visible_fraction, b.distance_m, f.perception_camera.exposureSmearPx().x(),
           f.perception_camera.exposureSmearPx().y(), demand ? " DEMANDED" : "");
+      // BP_ROBOTS=1: the robot percepts too (their feet regions and bodies steer the proposals).
+      if (std::getenv("BP_ROBOTS") && frame.robot_percepts) {
+        for (const auto& r : *frame.robot_percepts)
+          std::printf("   robot %.17g %.17g box %.17g %.17g %.17g %.17g\n", r.feet_px.x(),
+                      r.feet_px.y(), r.box.x0, r.box.y0, r.box.x1, r.box.y1);
+      }
       bool ph = false, dh = false;
       const auto& props = *frame.ball_proposals;
       for (std::size_t i = 0; i < props.size(); ++i) {

@@ -81,6 +81,8 @@ int probe(int argc, char** argv) {
   env("RD_CONF", config.robot_detector.min_confidence);
   env("RD_HELD", config.robot_detector.min_held_back_confidence);
   env("RD_WIDE", config.robot_detector.min_wide_group_confidence);
+  env("RD_SHIFT", config.robot_detector.wide_group_shift_width_fraction);
+  env("RD_SHIFTMIN", config.robot_detector.wide_group_min_shift_confidence);
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
   env("RD_SHINFILL", config.robot_detector.shin_min_fill_fraction);
   env("RD_SHINGAP", config.robot_detector.shin_gap_height_fraction);

@@ -791,6 +791,49 @@ TEST(RobotDetector, APieceOfAWideGroupNeedsItsOwnBar) {
   EXPECT_EQ(robots[0].box.x0, sure.box.x0);
 }
 
+TEST(RobotDetector, APieceOfAWideGroupMovesSidewaysToWhereRobotNetScoresItBest) {
+  // A piece half on a robot, under the pieces' bar (the stand-in net scores brightness), is looked
+  // at 1 and 2 steps of 0.125 of its width to either side, and the best look stays: two steps
+  // left, the most robot.
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(400, 100), cv::Point(460, 220), cv::Scalar(230), cv::FILLED);
+  const CameraModel cam = testCamera();
+  RobotProposal piece = proposal(pixelBox(430, 95, 490, 225));  // 60 px wide: steps of 7.5 px
+  piece.wide_group = true;
+  RobotDetectorParams params;
+  params.feet_max_steps = 0;
+  params.shin_gap_height_fraction = 0;
+  std::vector<RobotProposal> classified;
+  std::vector<float> confidences;
+  brightnessDetector(params).run(img.view(), cam, {piece}, {}, &classified, &confidences);
+  ASSERT_EQ(classified.size(), 1u);
+  EXPECT_DOUBLE_EQ(classified[0].box.x0, 415.0);
+  EXPECT_DOUBLE_EQ(classified[0].box.x1, 475.0);
+  EXPECT_DOUBLE_EQ(classified[0].feet_px.x(), piece.feet_px.x() - 15.0);
+  const float moved_score = confidences[0];
+
+  // Where it was, RobotNet scored it lower; a robot's own box, or with the shift off, stays.
+  params.wide_group_shift_width_fraction = 0;
+  brightnessDetector(params).run(img.view(), cam, {piece}, {}, &classified, &confidences);
+  EXPECT_DOUBLE_EQ(classified[0].box.x0, 430.0);
+  EXPECT_LT(confidences[0], moved_score);
+  RobotProposal own = piece;
+  own.wide_group = false;
+  brightnessDetector().run(img.view(), cam, {own}, {}, &classified, &confidences);
+  EXPECT_DOUBLE_EQ(classified[0].box.x0, 430.0);
+
+  // A piece RobotNet already takes (min_wide_group_confidence) is not looked at again.
+  RobotProposal sure = proposal(pixelBox(415, 95, 475, 225));  // three quarters on the robot
+  sure.wide_group = true;
+  brightnessDetector().run(img.view(), cam, {sure}, {}, &classified, &confidences);
+  ASSERT_GE(confidences[0], RobotDetectorParams().min_wide_group_confidence);
+  EXPECT_DOUBLE_EQ(classified[0].box.x0, 415.0);
+  RobotDetectorParams always;
+  always.min_wide_group_confidence = 1;  // every piece under the bar: it moves onto the robot
+  brightnessDetector(always).run(img.view(), cam, {sure}, {}, &classified, &confidences);
+  EXPECT_DOUBLE_EQ(classified[0].box.x0, 400.0);
+}
+
 TEST(RobotDetector, TheRobotsGroundPointLiesBeyondItsFeetAlongTheLineOfSight) {
   // The feet point is the nearest edge of the feet; the robot stands feet_to_centre_m beyond it,
   // on the same bearing from the camera.

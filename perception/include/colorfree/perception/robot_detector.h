@@ -25,6 +25,12 @@ struct RobotDetectorParams {
   /// A proposal from a wide row of feet points (RobotProposal::wide_group: mostly a field line
   /// with the background above it) becomes a percept only at this robot probability or more.
   double min_wide_group_confidence = 0.9;
+  /// Such a piece is split off where the row's width says, not where a robot stands: one RobotNet
+  /// scores from wide_group_min_shift_confidence to under min_wide_group_confidence is looked at
+  /// again moved sideways by -2, -1, 1 and 2 times wide_group_shift_width_fraction of its width,
+  /// and the best-scored of the five stays (shiftWidePieces; 0: never).
+  double wide_group_shift_width_fraction = 0.125;
+  double wide_group_min_shift_confidence = 0.2;
   /// A held-back candidate behind a nearer box RobotNet accepted is a robot standing behind that
   /// one (its feet at the nearer robot's knees or hands in the image), or the nearer robot's own
   /// knee, crotch or hand. It is classified too and takes part in the choice of percepts at this
@@ -154,6 +160,11 @@ class RobotDetector {
   /// for every box as it was. Only with the net and feet_max_steps > 0.
   void moveFeet(const GrayView& image, const CameraModel& camera, std::vector<RobotProposal>& boxes,
                 const std::vector<int>& which, const std::vector<float>& robot_net_patches) const;
+  /// The pieces of wide groups among the first `count` of `boxes` moved sideways to where RobotNet
+  /// scores them best (see wide_group_shift_width_fraction), with their scores in `robot` and their
+  /// RobotNet inputs in `patches`, all in one batch.
+  void shiftWidePieces(const GrayView& image, std::vector<RobotProposal>& boxes, std::size_t count,
+                       std::vector<float>& robot, std::vector<float>& patches) const;
 
   RobotDetectorParams params_;
   cnn::Classifier net_;
