@@ -18,6 +18,8 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.noise_jump_factor = f.getInRange("noise_jump_factor", 0, 20);
   p.carpet_update_weight = f.getInRange("carpet_update_weight", 0, 1);
   p.carpet_dark_decay = f.getInRange("carpet_dark_decay", 0, 1);
+  p.lit_band_beside_width_factor = f.getInRange("lit_band_beside_width_factor", 0, 10);
+  p.lit_band_height_fraction = f.getInRange("lit_band_height_fraction", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
   p.max_gap_height_fraction = f.getInRange("max_gap_height_fraction", 0, 1);
   p.feet_dark_height_fraction = f.getInRange("feet_dark_height_fraction", 0, 1);
@@ -61,6 +63,8 @@ const char* robotRejectReasonName(RobotRejectReason reason) {
     case RobotRejectReason::kTooMany: return "too many";
     case RobotRejectReason::kFieldLine:
       return "field line";
+    case RobotRejectReason::kLitCarpet:
+      return "lit carpet";
   }
   return "?";
 }
@@ -481,6 +485,23 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
               if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kFieldLine});
               y = above_line;
               continue;
+            }
+            // Lit carpet (uneven light): the scan goes on above its lower edge.
+            if (above_line < 0 && lit.no_side && p.lit_band_beside_width_factor > 0) {
+              const int band_px = static_cast<int>(
+                  std::lround(p.lit_band_beside_width_factor * *expected * width_per_height));
+              const LitTest lit_beside{ref, thr, false, x - band_px >= 0 ? band_px : 0,
+                                       x + band_px < image.width ? band_px : 0};
+              const int band_needed =
+                  std::max(1, static_cast<int>(p.lit_band_height_fraction * needed));
+              const RobotRun beside_run = robotRun(column, stride, y, feet_y, band_needed, max_gap,
+                                                   lit_beside, carpet, carpet_unknown, KneeGap{});
+              if (beside_run.filled < p.min_fill_fraction * band_needed) {
+                if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kLitCarpet});
+                carpet = ref = column[y * stride];
+                dark_bottom = dark_top = -1;
+                continue;
+              }
             }
             if (above_line < 0) {
               // A dark stretch just below the bright feet (a joint's gap away at most) and no

@@ -63,6 +63,8 @@ int probe(int argc, char** argv) {
   };
   RobotProposerParams& rpp = config.robot_proposer;
   env("RP_DECAY", rpp.carpet_dark_decay);
+  env("RP_BAND", rpp.lit_band_beside_width_factor);
+  env("RP_BANDH", rpp.lit_band_height_fraction);
   env("RP_UPDATE", rpp.carpet_update_weight);
   env("RP_JUMP", rpp.min_jump_gray);
   env("RP_RATIO", rpp.jump_ratio);

@@ -237,7 +237,10 @@ TEST(RobotProposer, CarpetAboveADarkPatchAtTheLowerBorderIsNoRobot) {
   const RobotProposals out = RobotProposer(params, FieldDimensions::loadDefault())
                                  .run(img.view(), cam, all, regions, true);
   EXPECT_TRUE(out.proposals.empty()) << describe(out);
-  params.beside_width_factor = 0;  // without the test beside it: a robot box on the patch
+  // Without the test beside it (and without the lit-carpet test, which takes the carpet above
+  // the patch for lit carpet as well): a robot box on the patch.
+  params.beside_width_factor = 0;
+  params.lit_band_beside_width_factor = 0;
   const RobotProposals unchecked = RobotProposer(params, FieldDimensions::loadDefault())
                                        .run(img.view(), cam, all, regions, true);
   EXPECT_FALSE(unchecked.proposals.empty()) << describe(unchecked);
@@ -341,6 +344,9 @@ TEST(RobotProposer, BoxesOfAWideGroupComeAfterAFarRobotUnderTheCap) {
                 cv::Point(int(band_feet.x() + 2 * band_w), int(band_feet.y()) - 1), cv::Scalar(200),
                 cv::FILLED);
   RobotProposerParams params = RobotProposerParams::loadDefault();
+  // The band is as bright beside as on each scan line: the lit-carpet test would leave only its
+  // two ends. Off here, for the rows of boxes the test does not catch.
+  params.lit_band_beside_width_factor = 0;
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
   const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
   const RobotProposer proposer(params, FieldDimensions::loadDefault());
@@ -604,6 +610,41 @@ TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   }
 }
 
+TEST(RobotProposer, ARobotBeyondABandOfLitCarpetIsFound) {
+  // Uneven light: a band of carpet lit brighter than the darker carpet around it, across the
+  // image, ends a little in front of a robot. From its lower edge the band fills a run as a
+  // robot's legs would, which ended the scan line's stretch there: the robot beyond it had no
+  // feet point. The band is as bright beside as it is on the scan line, the robot's legs are
+  // not: the band is carpet, and the scan goes on to the robot. Every window is scanned but the
+  // lowest row's, as in ALitCarpetStripeBelowARobotIsNoShin.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(19, 60);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {3.0, 0.1});
+  const double h = robotSizePx(cam, feet).h;
+  const int band_top = int(feet.y() + 0.15 * h), band_bottom = int(feet.y() + 1.2 * h);
+  ASSERT_LT(band_bottom, 440);
+  cv::Mat m = wrap(img);
+  cv::Mat band = m.rowRange(band_top, band_bottom);
+  band += cv::Scalar(80);  // the carpet's texture stays
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  ContrastRegions every;
+  every.columns = (img.width() + every.window_px - 1) / every.window_px;
+  every.rows = (img.height() + every.window_px - 1) / every.window_px;
+  every.mask.assign(static_cast<std::size_t>(every.columns) * every.rows, 1);
+  std::fill(every.mask.end() - every.columns, every.mask.end(), 0);
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  const RobotProposals out =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+  for (const RobotProposal& p : out.proposals) {
+    EXPECT_LT(p.feet_px.y(), band_top) << describe(out);  // no box on the band
+  }
+  params.lit_band_beside_width_factor = 0;  // without the test: the band ends every stretch
+  const RobotProposals unchecked =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  EXPECT_FALSE(proposedAt(unchecked, feet, h)) << describe(unchecked);
+}
+
 TEST(PixelNoise, MeasuresTheNoiseNotTheObjects) {
   const CameraModel cam = testCamera();
   for (const double sigma : {4.0, 10.0, 20.0}) {
@@ -634,8 +675,11 @@ TEST(RobotProposer, NoisyFrameKeepsTheFeet) {
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
   EXPECT_LE(out.proposals.size(), 3u) << describe(out);
 
+  // The fixed jump alone (and without the lit-carpet test, which also takes most runs the noise
+  // starts for carpet) loses the feet.
   RobotProposerParams fixed = RobotProposerParams::loadDefault();
   fixed.noise_jump_factor = 0;
+  fixed.lit_band_beside_width_factor = 0;
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
   const RobotProposals old = RobotProposer(fixed, FieldDimensions::loadDefault())
                                  .run(img.view(), cam, all, HighContrastDetector().run(img.view(), all));
@@ -648,7 +692,11 @@ TEST(RobotProposer, NoisyFrameKeepsTheFeet) {
   const RobotProposals given = shipped.run(img.view(), cam, all, regions, false, pixelNoiseGray(img.view(), all));
   EXPECT_EQ(describe(given), describe(shipped.run(img.view(), cam, all, regions)));
   EXPECT_TRUE(proposedAt(given, feet, h)) << describe(given);
-  EXPECT_FALSE(proposedAt(shipped.run(img.view(), cam, all, regions, false, 0.0), feet, h));
+  RobotProposerParams no_lit_band = RobotProposerParams::loadDefault();
+  no_lit_band.lit_band_beside_width_factor = 0;
+  EXPECT_FALSE(proposedAt(RobotProposer(no_lit_band, FieldDimensions::loadDefault())
+                              .run(img.view(), cam, all, regions, false, 0.0),
+                          feet, h));
 }
 
 TEST(RobotProposer, WrongSizedMaskIsAnError) {

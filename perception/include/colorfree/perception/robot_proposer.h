@@ -29,6 +29,15 @@ struct RobotProposerParams {
   /// After a darker stretch (a shadow, the ball's black patches) the reference a robot must be
   /// brighter than falls to the running carpet luminance by at most this fraction per row.
   double carpet_dark_decay = 0.02;
+  /// Uneven light: a wide band of carpet lit brighter than the carpet before it makes a run as a
+  /// robot's legs would, and that run would end the scan line's stretch below the robot standing
+  /// beyond it. A run whose lowest lit_band_height_fraction of the needed height is filled by no
+  /// pixel brighter than the pixel this many expected robot widths to its left or right too (and
+  /// none darker than the carpet) is such lit carpet: the scan goes on above its lower edge with
+  /// the carpet's brightness taken from there. Only the lowest part: a far robot's legs have the
+  /// field's bright boards and goals beside them higher up. 0: no such test.
+  double lit_band_beside_width_factor = 1.0;
+  double lit_band_height_fraction = 0.25;
   /// Carpet-like pixels tolerated inside a robot run (a joint, a seam): this many, or this
   /// fraction of the expected robot height when more; a longer gap ends the run.
   int max_gap_px = 3;
@@ -115,6 +124,7 @@ enum class RobotRejectReason {
   kOverlap,
   kTooMany,
   kFieldLine,  ///< a field line in front of shade (see line_stripe_factor)
+  kLitCarpet,  ///< carpet lit brighter than the carpet before it (see lit_band_beside_width_factor)
 };
 const char* robotRejectReasonName(RobotRejectReason reason);
 
