@@ -18,6 +18,8 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.noise_jump_factor = f.getInRange("noise_jump_factor", 0, 20);
   p.carpet_update_weight = f.getInRange("carpet_update_weight", 0, 1);
   p.carpet_dark_decay = f.getInRange("carpet_dark_decay", 0, 1);
+  p.smooth_min_noise_gray = f.getInRange("smooth_min_noise_gray", 0, 255);
+  p.smooth_width_px = static_cast<int>(f.getInRange("smooth_width_px", 1, 15));
   p.lit_band_beside_width_factor = f.getInRange("lit_band_beside_width_factor", 0, 10);
   p.lit_band_height_fraction = f.getInRange("lit_band_height_fraction", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
@@ -281,6 +283,36 @@ int rowAboveLine(const std::uint8_t* column, std::ptrdiff_t stride, int x, int w
   return beside && y + 1 - stripe_top <= max_stripe_px() ? stripe_top - 1 : -1;
 }
 
+// Each row's pixels averaged over `width` neighbours (the window shrinks at the row's ends),
+// rounded; integer arithmetic, vectorised along the row.
+GrayImage horizontalMean(const GrayView& image, int width) {
+  GrayImage out(image.width, image.height);
+  const int n = image.width, half = width / 2;
+  // acc × scale / 65536 is acc / width for every sum of `width` pixels (at most 15 × 255).
+  const std::uint32_t scale = (65536u + static_cast<std::uint32_t>(width) - 1) / width;
+  std::vector<std::uint16_t> acc(static_cast<std::size_t>(n));
+  for (int y = 0; y < image.height; ++y) {
+    const std::uint8_t* in = image.row(y);
+    std::uint8_t* o = out.data() + static_cast<std::size_t>(y) * n;
+    std::fill(acc.begin(), acc.end(), 0);
+    for (int k = -half; k <= half; ++k) {
+      const int lo = std::max(0, -k), hi = std::min(n, n - k);
+      for (int x = lo; x < hi; ++x) acc[x] = static_cast<std::uint16_t>(acc[x] + in[x + k]);
+    }
+    const int inner_lo = std::min(half, n), inner_hi = std::max(inner_lo, n - half);
+    for (int x = inner_lo; x < inner_hi; ++x) {
+      o[x] = static_cast<std::uint8_t>((acc[x] * scale + 32768u) >> 16);
+    }
+    for (int x : {0, inner_hi}) {  // the row's two ends, where the window is cut short
+      for (const int end = x == 0 ? inner_lo : n; x < end; ++x) {
+        const int count = std::min(n - 1, x + half) - std::max(0, x - half) + 1;
+        o[x] = static_cast<std::uint8_t>((acc[x] + count / 2) / count);
+      }
+    }
+  }
+  return out;
+}
+
 // A kept box whose feet point lies in the lower part of a nearer box kept after it, in the
 // proposals [behind_from, behind_to) (boxes behind a still nearer one come after the free-standing
 // ones), is held back behind it, as it would have been had the nearer box come first. A held-back
@@ -344,11 +376,12 @@ void holdBackBehindLaterNearer(RobotProposals& out, int behind_from, int behind_
 
 }  // namespace
 
-RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& camera,
+RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& camera,
                                   const IgnoreMask& ignore, const ContrastRegions& regions,
-                                  bool keep_rejected, std::optional<double> pixel_noise_gray) const {
-  if (image.empty()) throw Error("robot proposer: empty image");
-  if (ignore.width != image.width || ignore.height != image.height) {
+                                  bool keep_rejected,
+                                  std::optional<double> pixel_noise_gray) const {
+  if (input.empty()) throw Error("robot proposer: empty image");
+  if (ignore.width != input.width || ignore.height != input.height) {
     throw Error("robot proposer: ignore mask size does not match the image");
   }
   const RobotProposerParams& p = params_;
@@ -359,11 +392,23 @@ RobotProposals RobotProposer::run(const GrayView& image, const CameraModel& came
   std::vector<FeetPoint> feet, knee_feet;  // (knee_feet: those only a bridged run makes)
   const int step = p.column_step_px;
   // The frame's noise raises the jump (each scan pixel is compared on its own).
-  const double min_jump =
-      p.noise_jump_factor > 0
-          ? std::max(p.min_jump_gray,
-                     p.noise_jump_factor * (pixel_noise_gray ? *pixel_noise_gray : pixelNoiseGray(image, ignore)))
-          : p.min_jump_gray;
+  double noise = 0;
+  if (p.noise_jump_factor > 0 || p.smooth_min_noise_gray > 0) {
+    noise = pixel_noise_gray ? *pixel_noise_gray : pixelNoiseGray(input, ignore);
+  }
+  // A noisy frame (a dark hall's high gain) is scanned on a copy whose rows are averaged over
+  // smooth_width_px pixels: the noise falls by its square root, a robot's legs (wider than that)
+  // keep their brightness.
+  GrayImage smoothed;
+  GrayView image = input;
+  if (p.smooth_min_noise_gray > 0 && noise >= p.smooth_min_noise_gray && p.smooth_width_px > 1) {
+    smoothed = horizontalMean(input, p.smooth_width_px);
+    image = smoothed.view();
+    noise /= std::sqrt(static_cast<double>(p.smooth_width_px));
+  }
+  const double min_jump = p.noise_jump_factor > 0
+                              ? std::max(p.min_jump_gray, p.noise_jump_factor * noise)
+                              : p.min_jump_gray;
   const ScanConstants scan{min_jump, p.jump_ratio, p.carpet_update_weight,
                            1 - p.carpet_dark_decay, p.max_gap_px};
   const std::ptrdiff_t stride = image.stride;

@@ -3,7 +3,9 @@
 // from scenes/ci/robot_bench.yaml (two robots 1.2 m and 2 m away).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <random>
 
 #include "colorfree/perception/pipeline.h"
 #include "colorfree/perception/robot_detector.h"
@@ -23,6 +25,10 @@ struct Fixture {
   RobotOrientationEstimator orientation = RobotOrientationEstimator::loadDefault();
   RobotProposals proposals;
   std::vector<RobotPercept> robots;
+  // The same frame with Gaussian noise of sigma 30 gray levels (a dark hall's high gain), with its
+  // own contrast regions and noise estimate, for the proposer's smoothed scan.
+  GrayImage noisy;
+  std::unique_ptr<Frame> noisy_frame;
 
   Fixture() {
     sim::ScenarioRunner runner(sim::Scenario::load(std::string(COLORFREE_SOURCE_DIR) + "/scenes/ci/robot_bench.yaml"),
@@ -34,6 +40,17 @@ struct Fixture {
     std::vector<RobotProposal> classified;
     robots = detector.run(frame->image, frame->camera, proposals.proposals, proposals.held_back,
                           &classified);
+    noisy = rendered.image;
+    std::mt19937_64 rng(30);
+    std::normal_distribution<double> noise(0, 30);
+    for (int y = 0; y < noisy.height(); ++y) {
+      for (int x = 0; x < noisy.width(); ++x) {
+        noisy.at(x, y) =
+            static_cast<std::uint8_t>(std::clamp(noisy.at(x, y) + noise(rng), 0.0, 255.0));
+      }
+    }
+    noisy_frame = std::make_unique<Frame>(noisy.view(), rendered.perception_camera);
+    Pipeline(PipelineConfig::loadDefault()).process(*noisy_frame);
     std::fprintf(
         stderr, "bench frame: %zu proposals, %zu held back, %zu classified, %zu robots detected\n",
         proposals.proposals.size(), proposals.held_back.size(), classified.size(), robots.size());
@@ -52,6 +69,17 @@ void bmRobotProposals(benchmark::State& state) {
     benchmark::DoNotOptimize(out);
   }
   state.counters["proposals"] = static_cast<double>(f.proposals.proposals.size());
+}
+
+void bmRobotProposalsNoisy(benchmark::State& state) {
+  Fixture& f = fixture();
+  const Frame& n = *f.noisy_frame;
+  for (auto _ : state) {
+    auto out = f.proposer.run(n.image, n.camera, *n.ignore_mask, *n.contrast_regions, false,
+                              n.pixel_noise_gray);
+    benchmark::DoNotOptimize(out);
+  }
+  state.counters["proposals"] = static_cast<double>(n.robot_proposals->size());
 }
 
 void bmRobotClassification(benchmark::State& state) {
@@ -78,6 +106,7 @@ void bmRobotOrientation(benchmark::State& state) {
 }
 
 BENCHMARK(bmRobotProposals)->Unit(benchmark::kMillisecond);
+BENCHMARK(bmRobotProposalsNoisy)->Unit(benchmark::kMillisecond);
 BENCHMARK(bmRobotClassification)->Unit(benchmark::kMillisecond);
 BENCHMARK(bmRobotOrientation)->Unit(benchmark::kMillisecond);
 

@@ -100,6 +100,8 @@ int probe(int argc, char** argv) {
   env("RP_LINEB", rpp.line_beside_width_factor);
   env("RP_KNEE", rpp.knee_gap_height_fraction);
   env("RP_NOISE", rpp.noise_jump_factor);
+  env("RP_SMOOTH", rpp.smooth_min_noise_gray);
+  env("RP_SMOOTHW", rpp.smooth_width_px);
   env("RP_KNEELIT", rpp.knee_min_lit_height_fraction);
   env("RP_KNEEX", rpp.max_knee_proposals);
   env("RP_BOXW", rpp.box_width_factor);

@@ -699,6 +699,29 @@ TEST(RobotProposer, NoisyFrameKeepsTheFeet) {
                           feet, h));
 }
 
+TEST(RobotProposer, AVeryNoisyFrameIsScannedSmoothed) {
+  // Noise sigma 35 (a dark hall at full gain) on a carpet of 125, the legs 75 gray levels
+  // brighter: the jump that follows the noise (2.5 sigma) is higher than that, so too few single
+  // pixels are lit. Averaged over three pixels of the row the noise falls by the square root of
+  // three and the legs are lit.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(21, 125);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {1.8, 0.1});
+  const double h = robotSizePx(cam, feet).h;
+  test::addNoise(img, 35, 22);
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  ASSERT_GE(pixelNoiseGray(img.view(), all), params.smooth_min_noise_gray);
+  const RobotProposals out =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+  params.smooth_min_noise_gray = 0;  // each pixel on its own
+  const RobotProposals unsmoothed =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, regions);
+  EXPECT_FALSE(proposedAt(unsmoothed, feet, h)) << describe(unsmoothed);
+}
+
 TEST(RobotProposer, WrongSizedMaskIsAnError) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(4);
