@@ -20,6 +20,9 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.carpet_dark_decay = f.getInRange("carpet_dark_decay", 0, 1);
   p.smooth_min_noise_gray = f.getInRange("smooth_min_noise_gray", 0, 255);
   p.smooth_width_px = static_cast<int>(f.getInRange("smooth_width_px", 1, 15));
+  if (p.smooth_width_px % 2 == 0) {
+    throw Error(path + ": smooth_width_px must be odd (the pixel and as many on each side)");
+  }
   p.lit_band_beside_width_factor = f.getInRange("lit_band_beside_width_factor", 0, 10);
   p.lit_band_height_fraction = f.getInRange("lit_band_height_fraction", 0, 1);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));

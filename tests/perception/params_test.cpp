@@ -15,6 +15,7 @@
 #include "colorfree/perception/pipeline.h"
 #include "colorfree/perception/pose_fit.h"
 #include "colorfree/perception/robot_detector.h"
+#include "colorfree/perception/robot_proposer.h"
 
 namespace colorfree {
 namespace {
@@ -122,6 +123,21 @@ TEST(StageParams, ImpossibleCombinationsAreErrors) {
     EXPECT_NE(std::string(e.what()).find(shins), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("shin_min_height_fraction"), std::string::npos) << e.what();
   }
+}
+
+TEST(StageParams, AnEvenSmoothingWidthIsAnError) {
+  // The robot proposer's smoothed scan averages a pixel with as many on each side.
+  const std::string proposer = readFile(defaultParamDir() + "/robot_proposer.yaml");
+  const std::string even = writeTemp("even.yaml", withValue(proposer, "smooth_width_px", "4"));
+  try {
+    RobotProposerParams::load(even);
+    ADD_FAILURE() << "an even smoothing width accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(even), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("smooth_width_px"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(RobotProposerParams::load(
+      writeTemp("odd.yaml", withValue(proposer, "smooth_width_px", "5"))));
 }
 
 TEST(CameraFile, DocumentedExampleLoadsAndSeesTheGroundAhead) {

@@ -25,8 +25,8 @@ struct RobotProposerParams {
   /// they start would swallow the feet above them. 0: no such bound.
   double noise_jump_factor = 2.5;
   /// A frame with at least this much pixel noise (gray levels) is scanned on a copy whose rows are
-  /// averaged over smooth_width_px pixels (its noise, for the jump, divided by the square root of
-  /// that). 0: never.
+  /// averaged over smooth_width_px pixels (odd: the pixel and as many on each side; its noise, for
+  /// the jump, divided by the square root of that). 0: never.
   double smooth_min_noise_gray = 24;
   int smooth_width_px = 3;
   /// Carpet pixels are averaged into the running carpet luminance with this weight.
