@@ -582,6 +582,17 @@ TEST(RobotProposer, FeetReachedOverTheKneeOnlyInPartJoinTheOthers) {
   EXPECT_GE(narrow_at_feet, 1) << describe(out);
 }
 
+// Every window of the image marked as high-contrast (the contrast stage need not mark a lit
+// stripe's or band's lower edge), but for the lowest row, where the scan would not know the carpet.
+ContrastRegions everyWindowButTheLowestRow(const GrayImage& img) {
+  ContrastRegions every;
+  every.columns = (img.width() + every.window_px - 1) / every.window_px;
+  every.rows = (img.height() + every.window_px - 1) / every.window_px;
+  every.mask.assign(static_cast<std::size_t>(every.columns) * every.rows, 1);
+  std::fill(every.mask.end() - every.columns, every.mask.end(), 0);
+  return every;
+}
+
 TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   // The carpet lit brighter across the image (overexposed light: a bright stripe) a knee's gap
   // below a robot: the stripe runs on beside the robot, so its gap to the legs is no knee, and
@@ -596,12 +607,7 @@ TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   cv::rectangle(m, cv::Point(0, lit_top), cv::Point(639, lit_top + int(0.12 * h)), cv::Scalar(110),
                 cv::FILLED);
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
-  ContrastRegions every;
-  every.columns = (img.width() + every.window_px - 1) / every.window_px;
-  every.rows = (img.height() + every.window_px - 1) / every.window_px;
-  every.mask.assign(static_cast<std::size_t>(every.columns) * every.rows, 1);
-  // (but for the lowest row, where the scan would not know the carpet)
-  std::fill(every.mask.end() - every.columns, every.mask.end(), 0);
+  const ContrastRegions every = everyWindowButTheLowestRow(img);
   const RobotProposer proposer(kneeGapParams(), FieldDimensions::loadDefault());
   const RobotProposals out = proposer.run(img.view(), cam, all, every, true);
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
@@ -616,7 +622,7 @@ TEST(RobotProposer, ARobotBeyondABandOfLitCarpetIsFound) {
   // robot's legs would, which ended the scan line's stretch there: the robot beyond it had no
   // feet point. The band is as bright beside as it is on the scan line, the robot's legs are
   // not: the band is carpet, and the scan goes on to the robot. Every window is scanned but the
-  // lowest row's, as in ALitCarpetStripeBelowARobotIsNoShin.
+  // lowest row's.
   const CameraModel cam = testCamera();
   GrayImage img = carpet(19, 60);
   const Eigen::Vector2d feet = drawRobot(img, cam, {3.0, 0.1});
@@ -627,11 +633,7 @@ TEST(RobotProposer, ARobotBeyondABandOfLitCarpetIsFound) {
   cv::Mat band = m.rowRange(band_top, band_bottom);
   band += cv::Scalar(80);  // the carpet's texture stays
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
-  ContrastRegions every;
-  every.columns = (img.width() + every.window_px - 1) / every.window_px;
-  every.rows = (img.height() + every.window_px - 1) / every.window_px;
-  every.mask.assign(static_cast<std::size_t>(every.columns) * every.rows, 1);
-  std::fill(every.mask.end() - every.columns, every.mask.end(), 0);
+  const ContrastRegions every = everyWindowButTheLowestRow(img);
   RobotProposerParams params = RobotProposerParams::loadDefault();
   const RobotProposals out =
       RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
