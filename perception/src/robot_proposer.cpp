@@ -546,6 +546,9 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
                                                    lit_beside, carpet, carpet_unknown, KneeGap{});
               if (beside_run.filled < p.min_fill_fraction * band_needed) {
                 if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kLitCarpet});
+                // The reference is the band's own lowest pixel, which the walk then takes for
+                // carpet (it is not brighter than itself by the jump): the scan moves on and never
+                // looks at this run again.
                 carpet = ref = column[y * stride];
                 dark_bottom = dark_top = -1;
                 continue;
