@@ -168,6 +168,13 @@ struct LitTest {
   }
 };
 
+// The test with the pixels side_px to the left and right where they lie inside a row `width`
+// pixels wide; none (side_px 0, or both outside): no test beside.
+LitTest litTest(double ref, double thr, int x, int width, int side_px) {
+  const bool left = side_px > 0 && x - side_px >= 0, right = side_px > 0 && x + side_px < width;
+  return {ref, thr, !left && !right, left ? side_px : 0, right ? side_px : 0};
+}
+
 struct RobotRun {
   int top;     ///< the run's top row
   int filled;  ///< its rows that differ from the carpet
@@ -306,12 +313,15 @@ GrayImage horizontalMean(const GrayView& image, int width) {
     for (int x = inner_lo; x < inner_hi; ++x) {
       o[x] = static_cast<std::uint8_t>((acc[x] * scale + 32768u) >> 16);
     }
-    for (int x : {0, inner_hi}) {  // the row's two ends, where the window is cut short
-      for (const int end = x == 0 ? inner_lo : n; x < end; ++x) {
+    // The row's two ends, where the window is cut short.
+    const auto cut_short = [&](int from, int to) {
+      for (int x = from; x < to; ++x) {
         const int count = std::min(n - 1, x + half) - std::max(0, x - half) + 1;
         o[x] = static_cast<std::uint8_t>((acc[x] + count / 2) / count);
       }
-    }
+    };
+    cut_short(0, inner_lo);
+    cut_short(inner_hi, n);
   }
   return out;
 }
@@ -495,10 +505,7 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
                                   ? static_cast<int>(std::lround(p.beside_width_factor * *expected *
                                                                  width_per_height))
                                   : 0;
-          const int x_left = x - side_px, x_right = x + side_px;
-          const bool no_side = side_px <= 0 || (x_left < 0 && x_right >= image.width);
-          const LitTest lit{ref, thr, no_side, x_left >= 0 ? side_px : 0,
-                            x_right < image.width ? side_px : 0};
+          const LitTest lit = litTest(ref, thr, x, image.width, side_px);
           // How far beside a lit stretch a field line would still be lit (the line and knee tests).
           const int line_beside_px =
               static_cast<int>(std::lround(p.line_beside_width_factor * *expected * width_per_height));
@@ -538,13 +545,13 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
             if (above_line < 0 && lit.no_side && p.lit_band_beside_width_factor > 0) {
               const int band_px = static_cast<int>(
                   std::lround(p.lit_band_beside_width_factor * *expected * width_per_height));
-              const LitTest lit_beside{ref, thr, false, x - band_px >= 0 ? band_px : 0,
-                                       x + band_px < image.width ? band_px : 0};
+              const LitTest lit_beside = litTest(ref, thr, x, image.width, band_px);
               const int band_needed =
                   std::max(1, static_cast<int>(p.lit_band_height_fraction * needed));
-              const RobotRun beside_run = robotRun(column, stride, y, feet_y, band_needed, max_gap,
-                                                   lit_beside, carpet, carpet_unknown, KneeGap{});
-              if (beside_run.filled < p.min_fill_fraction * band_needed) {
+              // (Nothing beside inside the image: no test.)
+              if (!lit_beside.no_side && robotRun(column, stride, y, feet_y, band_needed, max_gap,
+                                                  lit_beside, carpet, carpet_unknown, KneeGap{})
+                                                 .filled < p.min_fill_fraction * band_needed) {
                 if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kLitCarpet});
                 // The reference is the band's own lowest pixel, which the walk then takes for
                 // carpet (it is not brighter than itself by the jump): the scan moves on and never

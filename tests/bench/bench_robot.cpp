@@ -3,9 +3,7 @@
 // from scenes/ci/robot_bench.yaml (two robots 1.2 m and 2 m away).
 #include <benchmark/benchmark.h>
 
-#include <algorithm>
 #include <cstdio>
-#include <random>
 
 #include "colorfree/perception/pipeline.h"
 #include "colorfree/perception/robot_detector.h"
@@ -13,6 +11,7 @@
 #include "colorfree/perception/robot_proposer.h"
 #include "colorfree/sim/runner.h"
 #include "colorfree/sim/world_renderer.h"
+#include "synthetic_field.h"
 
 namespace colorfree {
 namespace {
@@ -41,14 +40,7 @@ struct Fixture {
     robots = detector.run(frame->image, frame->camera, proposals.proposals, proposals.held_back,
                           &classified);
     noisy = rendered.image;
-    std::mt19937_64 rng(30);
-    std::normal_distribution<double> noise(0, 30);
-    for (int y = 0; y < noisy.height(); ++y) {
-      for (int x = 0; x < noisy.width(); ++x) {
-        noisy.at(x, y) =
-            static_cast<std::uint8_t>(std::clamp(noisy.at(x, y) + noise(rng), 0.0, 255.0));
-      }
-    }
+    test::addNoise(noisy, 30, 30);
     noisy_frame = std::make_unique<Frame>(noisy.view(), rendered.perception_camera);
     Pipeline(PipelineConfig::loadDefault()).process(*noisy_frame);
     std::fprintf(
