@@ -223,11 +223,12 @@ int probe(int argc, char** argv) {
         for (const RobotInImage& r : truth.robots) m = m || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
         const int fx = std::clamp(static_cast<int>(p.feet_px.x()), 0, frame.ignore_mask->width - 1);
         std::printf(
-            "   prop %zu feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) boundary=%d net=%.3f%s%s\n",
+            "   prop %zu feet=(%.0f,%.0f) box=(%.0f,%.0f)-(%.0f,%.0f) boundary=%d net=%.3f%s%s%s\n",
             i, p.feet_px.x(), p.feet_px.y(), p.box.x0, p.box.y0, p.box.x1, p.box.y1,
             frame.ignore_mask->top_y[fx],
             frame.robot_net_confidences ? (*frame.robot_net_confidences)[i] : -1.f,
-            m ? " MATCH" : "", i >= rp.proposals.size() ? " HELD BACK, FREED" : "");
+            m ? " MATCH" : "", i >= rp.proposals.size() ? " HELD BACK, FREED" : "",
+            p.wide_group ? " WIDE" : "");
         if (i >= rp.proposals.size() && frame.robot_net_confidences) {
           for (const HeldBackRobotProposal& h : rp.held_back) {
             if (h.proposal.feet_px != p.feet_px) continue;
