@@ -647,6 +647,38 @@ TEST(RobotProposer, ARobotBeyondABandOfLitCarpetIsFound) {
   EXPECT_FALSE(proposedAt(unchecked, feet, h)) << describe(unchecked);
 }
 
+TEST(RobotProposer, ARobotBeyondALineAlongLitCarpetIsFound) {
+  // A band of lit carpet (uneven light) from a field line 1.2 m away to a little in front of a
+  // robot 3 m away. Where the line is brighter than the lit carpet one robot width beside it (a
+  // line that ends or bends there) and soft (seen 10 cm wide), the band's lowest rows were mostly
+  // line and passed as a robot's: the run from the line's lower edge through the band to the robot
+  // made a box on the line and ended the scan line's stretch. The band test now starts above such
+  // a stripe of rows lit beside (at most line_stripe_factor line widths tall).
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(19, 60);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {3.0, 0.1});
+  const double h = robotSizePx(cam, feet).h;
+  const int band_top = int(feet.y() + 0.15 * h);
+  const int band_bottom = int(std::lround(cam.robotToPixel({1.2, 0, 0})->y()));
+  ASSERT_LT(band_bottom, 440);
+  cv::Mat m = wrap(img);
+  m.rowRange(band_top, band_bottom) += cv::Scalar(80);  // the carpet's texture stays
+  fillGround(img, cam, 1.2, 1.3, -0.1, 0.3, 230);       // the line, under the robot's columns
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const ContrastRegions every = everyWindowButTheLowestRow(img);
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  const RobotProposals out =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
+  for (const RobotProposal& p : out.proposals) {
+    EXPECT_LT(p.feet_px.y(), band_top) << describe(out);  // no box on the line or the band
+  }
+  params.line_stripe_factor = 0;  // no stripe (nor line test): the line's run ends the stretches
+  const RobotProposals unchecked =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  EXPECT_FALSE(proposedAt(unchecked, feet, h)) << describe(unchecked);
+}
+
 TEST(PixelNoise, MeasuresTheNoiseNotTheObjects) {
   const CameraModel cam = testCamera();
   for (const double sigma : {4.0, 10.0, 20.0}) {
