@@ -548,34 +548,41 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
               const LitTest lit_beside = litTest(ref, thr, x, image.width, band_px);
               const int band_needed =
                   std::max(1, static_cast<int>(p.lit_band_height_fraction * needed));
-              const auto lit_band = [&](int from) {
-                return robotRun(column, stride, from, from + 1, band_needed, max_gap, lit_beside,
-                                carpet, carpet_unknown, KneeGap{})
-                           .filled < p.min_fill_fraction * band_needed;
-              };
-              // A field line along the lit carpet's lower edge is brighter than the lit carpet
-              // beside it: there the band starts above the line, a stripe of rows lit beside no
-              // taller than line_stripe_factor line widths (asked for last: two projections).
-              int band_y = y;
-              if (!lit_beside.no_side && p.line_stripe_factor > 0) {
-                int top = y;
-                while (top > y_lo && y - top < band_needed && lit_beside(column + top * stride))
-                  --top;
-                if (top < y && !lit_beside(column + top * stride) && lit_band(top) &&
-                    y - top <= p.line_stripe_factor * linePx(camera, feet_px, line_width_m_)) {
-                  band_y = top;
-                }
-              }
               // (Nothing beside inside the image: no test.)
-              if (!lit_beside.no_side && (band_y < y || lit_band(y))) {
-                if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kLitCarpet});
-                // The reference is the band's own lowest pixel, which the walk then takes for
-                // carpet (it is not brighter than itself by the jump): the scan moves on and never
-                // looks at this run again.
-                y = band_y;
-                carpet = ref = column[y * stride];
-                dark_bottom = dark_top = -1;
-                continue;
+              if (!lit_beside.no_side) {
+                const auto band = [&](int from) {
+                  return robotRun(column, stride, from, from + 1, band_needed, max_gap, lit_beside,
+                                  carpet, carpet_unknown, KneeGap{});
+                };
+                const auto lit_carpet = [&](const RobotRun& run) {
+                  return run.filled < p.min_fill_fraction * band_needed;
+                };
+                // A field line along the lit carpet's lower edge is brighter than the lit carpet
+                // beside it: there the band starts above the line, a stripe of rows lit beside
+                // no taller than line_stripe_factor line widths (asked for last: two projections).
+                const RobotRun at_feet = band(y);
+                const int stripe_top = at_feet.first_unlit;
+                int band_y = -1;
+                if (lit_carpet(at_feet)) {
+                  band_y = y;
+                } else if (p.line_stripe_factor > 0 && stripe_top > y_lo && stripe_top < y &&
+                           lit_carpet(band(stripe_top)) &&
+                           y - stripe_top <=
+                               p.line_stripe_factor * linePx(camera, feet_px, line_width_m_)) {
+                  band_y = stripe_top;
+                }
+                if (band_y >= 0) {
+                  if (keep_rejected) {
+                    out.rejected.push_back({feet_px, RobotRejectReason::kLitCarpet});
+                  }
+                  // The reference is the band's own lowest pixel, which the walk then takes for
+                  // carpet (it is not brighter than itself by the jump): the scan moves on and
+                  // never looks at this run again.
+                  y = band_y;
+                  carpet = ref = column[y * stride];
+                  dark_bottom = dark_top = -1;
+                  continue;
+                }
               }
             }
             if (above_line < 0) {
