@@ -38,6 +38,7 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.knee_min_lit_height_fraction = f.getInRange("knee_min_lit_height_fraction", 0, 1);
   p.max_knee_proposals = static_cast<int>(f.getInRange("max_knee_proposals", 0, 100));
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
+  p.max_distance_carpet_diagonals = f.getInRange("max_distance_carpet_diagonals", 0, 10);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
   p.join_gap_width_fraction = f.getInRange("join_gap_width_fraction", 0, 5);
   p.min_width_fraction = f.getInRange("min_width_fraction", 0, 10);
@@ -78,7 +79,8 @@ RobotProposer::RobotProposer(RobotProposerParams params, FieldDimensions field)
     : params_(params),
       robot_height_m_(field.robot_height_m),
       robot_width_m_(field.robot_width_m),
-      line_width_m_(field.line_width_m) {}
+      line_width_m_(field.line_width_m),
+      carpet_diagonal_m_(2 * std::hypot(field.carpetHalfLength(), field.carpetHalfWidth())) {}
 
 namespace {
 
@@ -611,6 +613,7 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
     }
   }
 
+  const double max_distance_m = p.max_distance_carpet_diagonals * carpet_diagonal_m_;
   struct Candidate {
     RobotProposal proposal;
     double expected_h;
@@ -659,6 +662,15 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
       const double cx = (g.first_x + g.last_x + 1) / 2.0;
       const auto h = camera.robotHeightPx({cx, static_cast<double>(feet_y)}, robot_height_m_);
       if (!h) continue;
+      // (One ground point per group: the feet points' rows are checked by their robot height.)
+      if (max_distance_m > 0) {
+        const auto g = camera.pixelToGround({cx, static_cast<double>(feet_y)});
+        if (!g || g->norm() > max_distance_m) {
+          if (keep_rejected)
+            out.rejected.push_back({{cx, double(feet_y)}, RobotRejectReason::kTooFar});
+          continue;
+        }
+      }
       const double w_expected = *h * width_per_height;
       const double w = g.last_x - g.first_x + step;
       if (w < p.min_width_fraction * w_expected) {

@@ -679,6 +679,27 @@ TEST(RobotProposer, ARobotBeyondALineAlongLitCarpetIsFound) {
   EXPECT_FALSE(proposedAt(unchecked, feet, h)) << describe(unchecked);
 }
 
+TEST(RobotProposer, NoRobotStandsFartherThanTheCarpetsDiagonal) {
+  // Two robot-like shapes: 11 m away (on the carpet, seen from one corner of the field) and 15 m
+  // away, beyond the farthest two points of the carpet (12.8 m): there a frame's noise or the hall
+  // behind the boards made boxes RobotNet took for far robots.
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(23);
+  const Eigen::Vector2d on_carpet = drawRobot(img, cam, {11.0, -1.5});
+  const Eigen::Vector2d beyond = drawRobot(img, cam, {15.0, 1.5});
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  const ContrastRegions every = everyWindowButTheLowestRow(img);
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  const RobotProposals out =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  EXPECT_TRUE(proposedAt(out, on_carpet, robotSizePx(cam, on_carpet).h)) << describe(out);
+  EXPECT_FALSE(proposedAt(out, beyond, robotSizePx(cam, beyond).h)) << describe(out);
+  params.max_distance_carpet_diagonals = 0;
+  const RobotProposals unchecked =
+      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  EXPECT_TRUE(proposedAt(unchecked, beyond, robotSizePx(cam, beyond).h)) << describe(unchecked);
+}
+
 TEST(PixelNoise, MeasuresTheNoiseNotTheObjects) {
   const CameraModel cam = testCamera();
   for (const double sigma : {4.0, 10.0, 20.0}) {

@@ -89,6 +89,10 @@ struct RobotProposerParams {
   /// moved other robots' boxes).
   int max_knee_proposals = 4;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
+  /// A group of feet points whose ground point lies farther from the observer than this many
+  /// carpet diagonals (the farthest two points of the carpet lie apart) stands off the field: no
+  /// robot (0: no such test).
+  double max_distance_carpet_diagonals = 1.0;
   /// Feet points of neighbouring scan lines join when their rows differ by at most this fraction
   /// of the expected height (plus 2 px).
   double join_height_fraction = 0.12;
@@ -171,6 +175,7 @@ class RobotProposer {
   double robot_height_m_;
   double robot_width_m_;
   double line_width_m_;
+  double carpet_diagonal_m_;
 };
 
 }  // namespace colorfree
