@@ -593,6 +593,15 @@ ContrastRegions everyWindowButTheLowestRow(const GrayImage& img) {
   return every;
 }
 
+// The proposals with every window scanned but the lowest row's (the contrast stage need not mark
+// what a test draws), the rejected candidates kept.
+RobotProposals proposeInEveryWindow(const RobotProposerParams& params, const GrayImage& img,
+                                    const CameraModel& cam) {
+  return RobotProposer(params, FieldDimensions::loadDefault())
+      .run(img.view(), cam, IgnoreMask::all(img.width(), img.height()),
+           everyWindowButTheLowestRow(img), true);
+}
+
 TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   // The carpet lit brighter across the image (overexposed light: a bright stripe) a knee's gap
   // below a robot: the stripe runs on beside the robot, so its gap to the legs is no knee, and
@@ -606,10 +615,7 @@ TEST(RobotProposer, ALitCarpetStripeBelowARobotIsNoShin) {
   const int lit_top = int(feet.y() + 0.05 * h);
   cv::rectangle(m, cv::Point(0, lit_top), cv::Point(639, lit_top + int(0.12 * h)), cv::Scalar(110),
                 cv::FILLED);
-  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
-  const ContrastRegions every = everyWindowButTheLowestRow(img);
-  const RobotProposer proposer(kneeGapParams(), FieldDimensions::loadDefault());
-  const RobotProposals out = proposer.run(img.view(), cam, all, every, true);
+  const RobotProposals out = proposeInEveryWindow(kneeGapParams(), img, cam);
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
   for (const RobotProposal& p : out.proposals) {
     EXPECT_LT(p.feet_px.y(), lit_top) << describe(out);
@@ -632,18 +638,14 @@ TEST(RobotProposer, ARobotBeyondABandOfLitCarpetIsFound) {
   cv::Mat m = wrap(img);
   cv::Mat band = m.rowRange(band_top, band_bottom);
   band += cv::Scalar(80);  // the carpet's texture stays
-  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
-  const ContrastRegions every = everyWindowButTheLowestRow(img);
   RobotProposerParams params = RobotProposerParams::loadDefault();
-  const RobotProposals out =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  const RobotProposals out = proposeInEveryWindow(params, img, cam);
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
   for (const RobotProposal& p : out.proposals) {
     EXPECT_LT(p.feet_px.y(), band_top) << describe(out);  // no box on the band
   }
   params.lit_band_beside_width_factor = 0;  // without the test: the band ends every stretch
-  const RobotProposals unchecked =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  const RobotProposals unchecked = proposeInEveryWindow(params, img, cam);
   EXPECT_FALSE(proposedAt(unchecked, feet, h)) << describe(unchecked);
 }
 
@@ -664,18 +666,14 @@ TEST(RobotProposer, ARobotBeyondALineAlongLitCarpetIsFound) {
   cv::Mat m = wrap(img);
   m.rowRange(band_top, band_bottom) += cv::Scalar(80);  // the carpet's texture stays
   fillGround(img, cam, 1.2, 1.3, -0.1, 0.3, 230);       // the line, under the robot's columns
-  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
-  const ContrastRegions every = everyWindowButTheLowestRow(img);
   RobotProposerParams params = RobotProposerParams::loadDefault();
-  const RobotProposals out =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  const RobotProposals out = proposeInEveryWindow(params, img, cam);
   EXPECT_TRUE(proposedAt(out, feet, h)) << "feet " << feet.transpose() << describe(out);
   for (const RobotProposal& p : out.proposals) {
     EXPECT_LT(p.feet_px.y(), band_top) << describe(out);  // no box on the line or the band
   }
   params.line_stripe_factor = 0;  // no stripe (nor line test): the line's run ends the stretches
-  const RobotProposals unchecked =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  const RobotProposals unchecked = proposeInEveryWindow(params, img, cam);
   EXPECT_FALSE(proposedAt(unchecked, feet, h)) << describe(unchecked);
 }
 
@@ -687,16 +685,12 @@ TEST(RobotProposer, NoRobotStandsFartherThanTheCarpetsDiagonal) {
   GrayImage img = carpet(23);
   const Eigen::Vector2d on_carpet = drawRobot(img, cam, {11.0, -1.5});
   const Eigen::Vector2d beyond = drawRobot(img, cam, {15.0, 1.5});
-  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
-  const ContrastRegions every = everyWindowButTheLowestRow(img);
   RobotProposerParams params = RobotProposerParams::loadDefault();
-  const RobotProposals out =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  const RobotProposals out = proposeInEveryWindow(params, img, cam);
   EXPECT_TRUE(proposedAt(out, on_carpet, robotSizePx(cam, on_carpet).h)) << describe(out);
   EXPECT_FALSE(proposedAt(out, beyond, robotSizePx(cam, beyond).h)) << describe(out);
   params.max_distance_carpet_diagonals = 0;
-  const RobotProposals unchecked =
-      RobotProposer(params, FieldDimensions::loadDefault()).run(img.view(), cam, all, every, true);
+  const RobotProposals unchecked = proposeInEveryWindow(params, img, cam);
   EXPECT_TRUE(proposedAt(unchecked, beyond, robotSizePx(cam, beyond).h)) << describe(unchecked);
 }
 
