@@ -662,10 +662,11 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
       const double cx = (g.first_x + g.last_x + 1) / 2.0;
       const auto h = camera.robotHeightPx({cx, static_cast<double>(feet_y)}, robot_height_m_);
       if (!h) continue;
-      // (One ground point per group: the feet points' rows are checked by their robot height.)
+      // Off the carpet: one ground point per group (the scan checks each feet point only by its
+      // expected robot height, min_expected_height_px).
       if (max_distance_m > 0) {
-        const auto g = camera.pixelToGround({cx, static_cast<double>(feet_y)});
-        if (!g || g->norm() > max_distance_m) {
+        const auto ground = camera.pixelToGround({cx, static_cast<double>(feet_y)});
+        if (!ground || ground->norm() > max_distance_m) {
           if (keep_rejected)
             out.rejected.push_back({{cx, double(feet_y)}, RobotRejectReason::kTooFar});
           continue;
