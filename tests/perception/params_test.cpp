@@ -109,6 +109,20 @@ INSTANTIATE_TEST_SUITE_P(Shipped, StrictParamFile,
                          ::testing::Values("field_boundary.yaml", "body_model.yaml", "high_contrast.yaml",
                                            "field_lines.yaml", "pose_fit.yaml"));
 
+// Loading `path` throws an Error whose message names the file and `key`; `accepted` says what
+// was wrongly accepted when it does not throw.
+template <typename Load>
+void expectErrorNaming(const Load& load, const std::string& path, const std::string& key,
+                       const std::string& accepted) {
+  try {
+    load(path);
+    ADD_FAILURE() << accepted;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+  }
+}
+
 TEST(StageParams, ImpossibleCombinationsAreErrors) {
   const std::string lines = readFile(defaultParamDir() + "/field_lines.yaml");
   EXPECT_THROW(FieldLineParams::load(writeTemp("widths.yaml", withValue(lines, "min_width_factor", "5.0"))), Error);
@@ -116,26 +130,16 @@ TEST(StageParams, ImpossibleCombinationsAreErrors) {
   EXPECT_THROW(BodyModelParams::load(writeTemp("body.yaml", withValue(body, "chest_top_m", "0.10"))), Error);
   const std::string detector = readFile(defaultParamDir() + "/robot_detector.yaml");
   const std::string shins = writeTemp("shins.yaml", withValue(detector, "shin_min_height_fraction", "0.5"));
-  try {
-    RobotDetectorParams::load(shins);
-    ADD_FAILURE() << "a shin's least height over its greatest accepted";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(shins), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("shin_min_height_fraction"), std::string::npos) << e.what();
-  }
+  expectErrorNaming([](const std::string& f) { RobotDetectorParams::load(f); }, shins,
+                    "shin_min_height_fraction", "a shin's least height over its greatest accepted");
 }
 
 TEST(StageParams, AnEvenSmoothingWidthIsAnError) {
   // The robot proposer's smoothed scan averages a pixel with as many on each side.
   const std::string proposer = readFile(defaultParamDir() + "/robot_proposer.yaml");
   const std::string even = writeTemp("even.yaml", withValue(proposer, "smooth_width_px", "4"));
-  try {
-    RobotProposerParams::load(even);
-    ADD_FAILURE() << "an even smoothing width accepted";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(even), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("smooth_width_px"), std::string::npos) << e.what();
-  }
+  expectErrorNaming([](const std::string& f) { RobotProposerParams::load(f); }, even,
+                    "smooth_width_px", "an even smoothing width accepted");
   EXPECT_NO_THROW(RobotProposerParams::load(
       writeTemp("odd.yaml", withValue(proposer, "smooth_width_px", "5"))));
 }
