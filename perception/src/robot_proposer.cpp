@@ -37,6 +37,8 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   p.knee_gap_height_fraction = f.getInRange("knee_gap_height_fraction", 0, 1);
   p.knee_min_lit_height_fraction = f.getInRange("knee_min_lit_height_fraction", 0, 1);
   p.max_knee_proposals = static_cast<int>(f.getInRange("max_knee_proposals", 0, 100));
+  p.short_object_height_fraction = f.getInRange("short_object_height_fraction", 0, 1);
+  p.short_object_min_height_fraction = f.getInRange("short_object_min_height_fraction", 0, 1);
   p.min_expected_height_px = f.getInRange("min_expected_height_px", 1, 1000);
   p.max_distance_carpet_diagonals = f.getInRange("max_distance_carpet_diagonals", 0, 10);
   p.join_height_fraction = f.getInRange("join_height_fraction", 0, 1);
@@ -254,6 +256,49 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
   return out;
 }
 
+// The top row of the object whose lowest pixel is at row y when it ends within `rows` rows above
+// y. Its pixels differ by more than thr from the pixels beside_px to the left and right (brighter
+// than one of them: the ball's white, a robot's legs; darker than both: the ball's black patches,
+// a dark jersey, which keeps a robot's object going up its body); it ends where more than max_gap
+// rows follow that are like the carpet beside them (a field line runs on: like its carpet).
+// -1: a taller object, none to compare with beside it, or no such end in the stretch (to y_lo).
+int shortObjectTop(const std::uint8_t* column, std::ptrdiff_t stride, int x, int width, int y,
+                   int y_lo, int rows, int max_gap, double thr, int beside_px) {
+  const bool left = beside_px > 0 && x - beside_px >= 0,
+             right = beside_px > 0 && x + beside_px < width;
+  if (!left && !right) return -1;
+  const auto brighter = [&](const std::uint8_t* px) {
+    return (left && *px - px[-beside_px] > thr) || (right && *px - px[beside_px] > thr);
+  };
+  const auto darker = [&](const std::uint8_t* px) {
+    return (!left || px[-beside_px] - *px > thr) && (!right || px[beside_px] - *px > thr);
+  };
+  // Such a gap holds two neighbours of every `step`-th row: without two neutral ones there is
+  // none (most objects are robots' legs: a cheap no).
+  const int step = std::max(1, (max_gap + 1) / 2);
+  const int last = std::max(y_lo, y - rows - max_gap - 1);
+  bool pair = false;
+  for (int yy = y, before = 0; yy >= last && !pair; yy -= step) {
+    const std::uint8_t* px = column + yy * stride;
+    const int neutral = !brighter(px) && !darker(px);
+    pair = before && neutral;
+    before = neutral;
+  }
+  if (!pair) return -1;
+  int top = y, gap = 0;
+  for (int yy = y; yy >= y_lo; --yy) {
+    const std::uint8_t* px = column + yy * stride;
+    if (brighter(px) || darker(px)) {
+      if (y - yy > rows) return -1;
+      top = yy;
+      gap = 0;
+    } else if (++gap > max_gap) {
+      return top;
+    }
+  }
+  return -1;
+}
+
 // The rows a field line line_width_m wide covers in the image with its near edge at `px` (0 where
 // the ground there is not seen).
 double linePx(const CameraModel& camera, const Eigen::Vector2d& px, double line_width_m) {
@@ -404,7 +449,8 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
   const int win = regions.window_px;
   const double width_per_height = robot_width_m_ / robot_height_m_;
 
-  std::vector<FeetPoint> feet, knee_feet;  // (knee_feet: those only a bridged run makes)
+  // (knee_feet: those only a bridged run makes; upper_feet: those above a short object)
+  std::vector<FeetPoint> feet, knee_feet, upper_feet;
   const int step = p.column_step_px;
   // The frame's noise raises the jump (each scan pixel is compared on its own).
   double noise = 0;
@@ -475,6 +521,7 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
         // The stretch of pixels darker than the reference the scan passed last (rows, bottom
         // and top; -1: none): the feet's dark side panels, or the contact shadow under them.
         int dark_bottom = -1, dark_top = -1;
+        bool above_short = false;  // the scan went on above a short object's feet point
         int y = y_hi;
         while (y >= y_lo) {
           // Walk up over the carpet (and darker pixels) to the next brighter pixel.
@@ -597,9 +644,30 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
                   dark_bottom + 1 - feet_y <= p.feet_dark_height_fraction * *expected) {
                 feet_y = dark_bottom + 1;
               }
-              (knee_apart ? knee_feet : feet).push_back({x, feet_y, *expected, knee_apart});
+              (knee_apart    ? knee_feet
+               : above_short ? upper_feet
+                             : feet)
+                  .push_back({x, feet_y, *expected, knee_apart});
               out.feet_points_px.push_back({x + 0.5, static_cast<double>(feet_y)});
-              if (!knee_apart) break;  // one robot per scan line stretch: the lowest
+              if (!knee_apart) {
+                // One robot per scan line stretch, the lowest, unless its object ends low (the
+                // ball in front of a robot): then the scan goes on above it.
+                const int top =
+                    p.short_object_height_fraction > 0
+                        ? shortObjectTop(column, stride, x, image.width, y, y_lo,
+                                         static_cast<int>(
+                                             std::ceil(p.short_object_height_fraction * *expected)),
+                                         max_gap, thr,
+                                         static_cast<int>(std::lround(
+                                             p.beside_width_factor * *expected * width_per_height)))
+                        : -1;
+                if (top < 0 || feet_y - top < p.short_object_min_height_fraction * *expected) break;
+                y = top - 1;
+                ref = carpet;
+                dark_bottom = dark_top = -1;
+                above_short = true;
+                continue;
+              }
             }
             // (Without the gap the run was too short.)
             if (keep_rejected) out.rejected.push_back({feet_px, RobotRejectReason::kRunTooShort});
@@ -790,6 +858,30 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
                                                         ? RobotRejectReason::kTooMany
                                                         : RobotRejectReason::kOverlap});
       }
+    }
+  }
+  // Robots above short objects (the ball in front of them), grouped apart from the others (feet
+  // points over a near robot's shaded legs would move the boxes of the robots behind it), last.
+  for (const Candidate& c : candidatesOf(upper_feet, false)) {
+    if (fit(c, false) != Fit::kBehind) {
+      keep(c, false);
+      continue;
+    }
+    // Above a nearer box's lower part: held back behind every box whose column it stands in (the
+    // short object's, which RobotNet rejects, or a robot's, whose body it may be).
+    nearer.clear();
+    const Eigen::Vector2d& f = c.proposal.feet_px;
+    for (std::size_t k = 0; k < out.proposals.size(); ++k) {
+      const RobotProposal& kept = out.proposals[k];
+      if (f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() < kept.feet_px.y() &&
+          f.y() > kept.box.y0) {
+        nearer.push_back(static_cast<int>(k));
+      }
+    }
+    if (static_cast<int>(out.held_back.size()) < p.max_held_back) {
+      out.held_back.push_back({c.proposal, nearer});
+    } else if (keep_rejected) {
+      out.rejected.push_back({c.proposal.feet_px, RobotRejectReason::kTooMany});
     }
   }
   holdBackBehindLaterNearer(out, behind_from, behind_to, p.own_body_height_fraction);

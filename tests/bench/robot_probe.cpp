@@ -105,6 +105,8 @@ int probe(int argc, char** argv) {
   env("RP_KNEELIT", rpp.knee_min_lit_height_fraction);
   env("RP_KNEEX", rpp.max_knee_proposals);
   env("RP_BOXW", rpp.box_width_factor);
+  env("RP_SHORT", rpp.short_object_height_fraction);
+  env("RP_SHORTMIN", rpp.short_object_min_height_fraction);
   env("HC_LIGHT", config.high_contrast.light_contrast_fraction);
   // RP_MODELS=DIR: the nets from DIR (a retrained RobotNet) instead of perception/models.
   if (const char* models = std::getenv("RP_MODELS")) config.model_dir = models;

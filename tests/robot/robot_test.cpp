@@ -694,6 +694,44 @@ TEST(RobotProposer, NoRobotStandsFartherThanTheCarpetsDiagonal) {
   EXPECT_TRUE(proposedAt(unchecked, beyond, robotSizePx(cam, beyond).h)) << describe(unchecked);
 }
 
+TEST(RobotProposer, ARobotBehindAShortObjectIsFound) {
+  // A short bright object 1.2 m away (as the ball in front of a robot: its run, with its shadow
+  // lowering the carpet reference, passes as legs), wider than the robot 3.5 m behind it, whose
+  // every scan line it ends. Its object ends low with carpet above it: the scan goes on above it,
+  // and the robot behind is held back behind the object's box (classified, and a robot where
+  // RobotNet rejects that box).
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(29);
+  const Eigen::Vector2d far = drawRobot(img, cam, {3.5, 0.0});
+  const double far_h = robotSizePx(cam, far).h;
+  const Eigen::Vector2d near = *cam.robotToPixel({1.2, 0, 0});
+  const auto [near_h, near_w] = robotSizePx(cam, near);
+  const double width = 2.2 * robotSizePx(cam, far).w;
+  cv::rectangle(wrap(img), cv::Point(int(near.x() - width / 2), int(near.y() - 0.27 * near_h)),
+                cv::Point(int(near.x() + width / 2), int(near.y()) - 1), cv::Scalar(200),
+                cv::FILLED);
+  ASSERT_LT(far.y(), near.y() - 0.4 * near_h);  // carpet between the object and the robot's feet
+  const auto held_back_at = [&](const RobotProposals& out) {
+    for (const HeldBackRobotProposal& h : out.held_back) {
+      const Eigen::Vector2d& f = h.proposal.feet_px;
+      if (std::abs(f.y() - far.y()) <= 2.0 && std::abs(f.x() - far.x()) <= 0.15 * far_h)
+        return true;
+    }
+    return false;
+  };
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  const RobotProposals out = proposeInEveryWindow(params, img, cam);
+  EXPECT_TRUE(proposedAt(out, {near.x(), near.y()}, near_h)) << describe(out);  // the object's box
+  EXPECT_TRUE(held_back_at(out) || proposedAt(out, far, far_h)) << describe(out);
+  params.short_object_height_fraction = 0;  // one feet point per stretch: the object's
+  const RobotProposals lowest = proposeInEveryWindow(params, img, cam);
+  EXPECT_FALSE(held_back_at(lowest) || proposedAt(lowest, far, far_h)) << describe(lowest);
+  params = RobotProposerParams::loadDefault();  // an object taller than the bound hides the robot
+  params.short_object_height_fraction = 0.2;
+  const RobotProposals tall = proposeInEveryWindow(params, img, cam);
+  EXPECT_FALSE(held_back_at(tall) || proposedAt(tall, far, far_h)) << describe(tall);
+}
+
 TEST(PixelNoise, MeasuresTheNoiseNotTheObjects) {
   const CameraModel cam = testCamera();
   for (const double sigma : {4.0, 10.0, 20.0}) {

@@ -88,6 +88,16 @@ struct RobotProposerParams {
   /// found without the gap. 0: bridged runs give feet points like any other (robot11's way, which
   /// moved other robots' boxes).
   int max_knee_proposals = 4;
+  /// An accepted run whose object (pixels brighter or darker than the carpet one robot width
+  /// beside them) ends within this fraction of the expected height above its feet, more than a
+  /// gap of rows like that carpet above it, is no robot that hides what stands behind it (the
+  /// ball in front of a robot, whose shadow lowered the reference so that the carpet above it
+  /// filled the run): the scan goes on above it, and the feet points found there make candidates
+  /// of their own, after all others, held back behind the boxes whose columns they stand in
+  /// (0: one feet point per stretch, the lowest; README robot25).
+  double short_object_height_fraction = 0.3;
+  /// ... and at least this fraction tall (a field line's stripe is no such object).
+  double short_object_min_height_fraction = 0.1;
   double min_expected_height_px = 10;  ///< robots smaller than this (far away) are not proposed
   /// A group of feet points whose ground point lies farther from the observer than this many
   /// carpet diagonals (the farthest two points of the carpet lie apart) stands off the field: no
