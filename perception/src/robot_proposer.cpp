@@ -776,7 +776,9 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
   // farther robot's, or the nearer robot's shoulder or arm: it comes after every free-standing
   // candidate, so near robots' arms do not take the places of far robots under the cap.
   enum class Fit { kFree, kBehind, kHeldBack, kOverlap };
-  std::vector<int> nearer;
+  // (fit's: the nearer boxes whose lower part holds the feet point; those it stands behind above
+  // it)
+  std::vector<int> nearer, behind_of;
   // A knee candidate (knee: true) overlaps only boxes standing about as low as it does: a box
   // higher up is the same robot's without the gap, its feet at the knees, and RobotNet decides.
   const auto overlaps = [&](const RobotProposal& kept, const Candidate& c, bool knee) {
@@ -787,6 +789,7 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
   const auto fit = [&](const Candidate& c, bool knee) {
     Fit result = Fit::kFree;
     nearer.clear();
+    behind_of.clear();
     for (std::size_t k = 0; k < out.proposals.size(); ++k) {
       const RobotProposal& kept = out.proposals[k];
       const Eigen::Vector2d& f = c.proposal.feet_px;
@@ -797,6 +800,7 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
         nearer.push_back(static_cast<int>(k));
       } else if (in_column && below_top && f.y() > kept.box.y0) {
         result = Fit::kBehind;
+        behind_of.push_back(static_cast<int>(k));
       }
     }
     return nearer.empty() ? result : Fit::kHeldBack;
@@ -867,19 +871,10 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
       keep(c, false);
       continue;
     }
-    // Above a nearer box's lower part: held back behind every box whose column it stands in (the
-    // short object's, which RobotNet rejects, or a robot's, whose body it may be).
-    nearer.clear();
-    const Eigen::Vector2d& f = c.proposal.feet_px;
-    for (std::size_t k = 0; k < out.proposals.size(); ++k) {
-      const RobotProposal& kept = out.proposals[k];
-      if (f.x() > kept.box.x0 && f.x() < kept.box.x1 && f.y() < kept.feet_px.y() &&
-          f.y() > kept.box.y0) {
-        nearer.push_back(static_cast<int>(k));
-      }
-    }
+    // Above a nearer box's lower part: held back behind every box it stands behind (the short
+    // object's, which RobotNet rejects, or a robot's, whose body it may be).
     if (static_cast<int>(out.held_back.size()) < p.max_held_back) {
-      out.held_back.push_back({c.proposal, nearer});
+      out.held_back.push_back({c.proposal, behind_of});
     } else if (keep_rejected) {
       out.rejected.push_back({c.proposal.feet_px, RobotRejectReason::kTooMany});
     }
