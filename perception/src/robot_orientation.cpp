@@ -30,6 +30,11 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.silhouette_min_chain_fraction = f.getInRange("silhouette_min_chain_fraction", 0, 1);
   p.silhouette_min_above_carpet_ratio = f.getInRange("silhouette_min_above_carpet_ratio", 0, 4);
   p.silhouette_above_rows_px = static_cast<int>(f.getInRange("silhouette_above_rows_px", 1, 16));
+  p.dark_panel_max_gray_ratio = f.getInRange("dark_panel_max_gray_ratio", 0, 1);
+  p.dark_panel_min_height_fraction = f.getInRange("dark_panel_min_height_fraction", 0, 1);
+  p.dark_panel_max_height_fraction = f.getInRange("dark_panel_max_height_fraction", 0, 1);
+  p.dark_panel_min_chain_share = f.getInRange("dark_panel_min_chain_share", 0, 1);
+  p.dark_panel_below_feet_fraction = f.getInRange("dark_panel_below_feet_fraction", 0, 1);
   p.vote_distance_m = f.getInRange("vote_distance_m", 0.0001, 1);
   p.vote_margin_m = f.getInRange("vote_margin_m", 0, 2);
   p.second_line_min_length_m = f.getInRange("second_line_min_length_m", 0, 2);
@@ -371,6 +376,37 @@ LineHypothesis refineLine(const LineHypothesis& line, const std::vector<Eigen::V
 }
 }  // namespace
 
+namespace {
+
+struct DarkPanel {
+  double max_gray;         ///< a panel's pixels are darker than this (the 3-px mean of a row)
+  int min_rows, max_rows;  ///< its height
+  int max_end_row;         ///< its lower end at most this row (the feet stand on it)
+};
+
+// The row below the dark panel whose upper edge is at `row` (the edge's lowest row: the panel
+// starts within two rows below it), or `row` when no such panel is there.
+int belowDarkPanel(const GrayView& image, int x, int row, const DarkPanel& panel) {
+  if (x < 1 || x + 1 >= image.width) return row;
+  const auto dark = [&](int y) {
+    const std::uint8_t* px = image.row(y) + x;
+    return px[-1] + px[0] + px[1] < 3 * panel.max_gray;
+  };
+  int top = row;
+  while (top < image.height && top - row <= 2 && !dark(top)) ++top;
+  if (top >= image.height || top - row > 2) return row;
+  int end = top;
+  while (end < image.height && end - top <= panel.max_rows && dark(end)) ++end;
+  const int rows = end - top;
+  if (end >= image.height || end > panel.max_end_row || rows < panel.min_rows ||
+      rows > panel.max_rows) {
+    return row;
+  }
+  return end;
+}
+
+}  // namespace
+
 RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const CameraModel& camera,
                                                 const RobotPercept& robot) const {
   const RobotOrientationParams& p = params_;
@@ -397,8 +433,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   // (outside the robot's box, however tight the box; inside its outer columns where the image
   // ends there). An edge with no more than the carpet above it is a cast shadow's upper edge or
   // the carpet's texture, not the feet (white, or lit gray, above the carpet or the dark panels).
-  double min_above_gray = 0;
-  if (p.silhouette_min_above_carpet_ratio > 0) {
+  double min_above_gray = 0, carpet_gray = 0;
+  if (p.silhouette_min_above_carpet_ratio > 0 || p.dark_panel_max_gray_ratio > 0) {
     // The median by a histogram of the gray levels: the same value as sorting them. Counted in
     // four histograms, by a column's place in the list, so that neighbouring columns of the same
     // gray do not wait on each other's increments; summed after.
@@ -425,6 +461,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     // The gray at rank outer_count / 2 in ascending order.
     int median = 0;
     for (int rank = outer_count / 2; rank >= histogram[median]; ++median) rank -= histogram[median];
+    carpet_gray = median;
     min_above_gray = p.silhouette_min_above_carpet_ratio * median;
   }
   // An edge passes when the mean gray of the rows just above it (its upper row y_edge) is at least
@@ -575,16 +612,45 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   for (std::size_t i = 0; i < hits.size(); ++i) ++chain_columns[root(static_cast<int>(i))];
   const double min_chain = std::max<double>(p.silhouette_min_chain_px,
                                             p.silhouette_min_chain_fraction * robot.box.width() / p.scan_step_px);
-  // Per scan line, the lowest hit on a long chain is the lower silhouette.
+  // Per scan line, the lowest hit on a long chain is the lower silhouette (below a dark panel:
+  // its lower end).
+  const DarkPanel panel{p.dark_panel_max_gray_ratio * carpet_gray,
+                        static_cast<int>(std::ceil(p.dark_panel_min_height_fraction * h)),
+                        static_cast<int>(p.dark_panel_max_height_fraction * h),
+                        static_cast<int>(robot.feet_px.y() + p.dark_panel_below_feet_fraction * h)};
+  // Per scan line its hit, and the row below a panel there (-1: none); a chain's points move
+  // below panels only where most of its points have one (a heel's edge does; a cast shadow's
+  // slanted edge gives a short dark stretch on a few scan lines).
+  std::vector<int> chosen(columns, -1), below_panel(columns, -1);
+  std::vector<int> chain_chosen(hits.size(), 0), chain_panels(hits.size(), 0);
   for (int c = 0; c < columns; ++c) {
     for (int i = first_hit[c]; i < first_hit[c + 1]; ++i) {
       if (chain_columns[root(i)] < min_chain) continue;
-      const Eigen::Vector2d pt(scan_x[c] + 0.5, hits[i].row + 0.5);
-      if (const auto g = camera.pixelToGround(pt)) {
-        out.silhouette_px.push_back(pt);
-        out.silhouette_in_robot.push_back(*g);
+      chosen[c] = i;
+      ++chain_chosen[root(i)];
+      if (p.dark_panel_max_gray_ratio > 0) {
+        const int row = belowDarkPanel(image, scan_x[c], hits[i].row, panel);
+        if (row != hits[i].row) {
+          below_panel[c] = row;
+          ++chain_panels[root(i)];
+        }
       }
       break;
+    }
+  }
+  std::vector<int> panel_rows;  // per silhouette point, the rows it moved down below a panel
+  for (int c = 0; c < columns; ++c) {
+    const int i = chosen[c];
+    if (i < 0) continue;
+    const int r = root(i);
+    const bool move =
+        below_panel[c] >= 0 && chain_panels[r] >= p.dark_panel_min_chain_share * chain_chosen[r];
+    const int row = move ? below_panel[c] : hits[i].row;
+    const Eigen::Vector2d pt(scan_x[c] + 0.5, row + 0.5);
+    if (const auto g = camera.pixelToGround(pt)) {
+      out.silhouette_px.push_back(pt);
+      out.silhouette_in_robot.push_back(*g);
+      panel_rows.push_back(row - hits[i].row);
     }
   }
   SilhouetteLineBounds bounds;
@@ -613,7 +679,19 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     const auto a = camera.robotToPixel({line->a.x(), line->a.y(), 0});
     const auto b = camera.robotToPixel({line->b.x(), line->b.y(), 0});
     if (!a || !b) continue;
-    const Eigen::Vector2d mid = (*a + *b) / 2;
+    // The region hangs from the edges the silhouette found (a panel's upper edge), where the nets
+    // were trained to see it: the line's points moved below panels, on average, move it back up.
+    double up = 0;
+    int n_up = 0;
+    for (std::size_t k = 0; k < panel_rows.size(); ++k) {
+      const double x = out.silhouette_px[k].x();
+      if (x >= std::min(a->x(), b->x()) && x <= std::max(a->x(), b->x())) {
+        up += panel_rows[k];
+        ++n_up;
+      }
+    }
+    if (n_up > 0) up /= n_up;
+    const Eigen::Vector2d mid = (*a + *b) / 2 - Eigen::Vector2d(0, up);
     const auto hpx = camera.robotHeightPx(mid, robot_height_m_);
     if (!hpx) continue;
     const double margin = std::max(2.0, p.region_margin_fraction * std::abs(a->x() - b->x()));
@@ -621,8 +699,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     region.line_in_robot = *line;
     region.box.x0 = std::min(a->x(), b->x()) - margin;
     region.box.x1 = std::max(a->x(), b->x()) + margin;
-    region.box.y0 = std::min(a->y(), b->y()) - p.region_above_fraction * *hpx;
-    region.box.y1 = std::max(a->y(), b->y()) + p.region_below_fraction * *hpx;
+    region.box.y0 = std::min(a->y(), b->y()) - up - p.region_above_fraction * *hpx;
+    region.box.y1 = std::max(a->y(), b->y()) - up + p.region_below_fraction * *hpx;
     out.regions.push_back(region);
   }
   return out;

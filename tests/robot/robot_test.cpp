@@ -1548,6 +1548,83 @@ TEST(LinesGenerator, IgnoresTheCastShadowBelowAFootBlock) {
   }
 }
 
+// A back view's heels: a dark panel on the block's near face from the ground up to 0.04 m, the
+// white shoe above it. The silhouette's edge is the panel's upper edge (white above dark); below
+// the panel the points move to its lower end, the ground: the line lies on the face's ground edge.
+// With the rule off they stay on the upper edge, the panel's height above.
+TEST(LinesGenerator, MovesBelowAHeelPanelToTheGround) {
+  const CameraModel cam = testCamera();
+  for (const double yaw_deg : {0.0, 20.0, -25.0}) {
+    GrayImage img = carpet(7, 90);
+    const Eigen::Vector2d centre(1.2, 0.0);
+    const double yaw = yaw_deg * std::numbers::pi / 180;
+    const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw)), v(-std::sin(yaw), std::cos(yaw));
+    const auto px = [&](double a, double b, double z) {
+      const Eigen::Vector2d g = centre + a * u + b * v;
+      const auto q = cam.robotToPixel({g.x(), g.y(), z});
+      return cv::Point(int(std::lround(q->x())), int(std::lround(q->y())));
+    };
+    std::vector<cv::Point> pts, hull;
+    for (double a : {-0.08, 0.08})
+      for (double b : {-0.10, 0.10})
+        for (double z : {0.0, 0.08}) pts.push_back(px(a, b, z));
+    cv::convexHull(pts, hull);
+    cv::Mat m = wrap(img);
+    cv::fillConvexPoly(m, hull, cv::Scalar(220));
+    // The near face (a = -0.08, towards the camera) dark from the ground to 0.04 m.
+    const std::vector<cv::Point> panel = {px(-0.08, -0.10, 0), px(-0.08, 0.10, 0),
+                                          px(-0.08, 0.10, 0.04), px(-0.08, -0.10, 0.04)};
+    cv::fillConvexPoly(m, panel, cv::Scalar(25));
+    RobotPercept robot;
+    int lowest = 0;
+    for (const auto& q : hull) lowest = std::max(lowest, q.y);
+    robot.feet_px = {cam.robotToPixel({centre.x(), centre.y(), 0})->x(), double(lowest)};
+    const double h = robotSizePx(cam, robot.feet_px).h;
+    robot.box = {robot.feet_px.x() - 0.4 * h, robot.feet_px.y() - h, robot.feet_px.x() + 0.4 * h,
+                 robot.feet_px.y() + 0.05 * h};
+    robot.position_in_robot = centre;
+    // The face's ground edge and its panel's upper edge, as rows over the face's columns.
+    const auto rowOn = [&](double z, double x) {
+      const cv::Point l = px(-0.08, -0.10, z), r = px(-0.08, 0.10, z);
+      return l.y + (x - l.x) * double(r.y - l.y) / (r.x - l.x);
+    };
+    const cv::Point face_l = px(-0.08, -0.10, 0), face_r = px(-0.08, 0.10, 0);
+    const double panel_px = rowOn(0, face_l.x) - rowOn(0.04, face_l.x);
+    ASSERT_GT(panel_px, 0.045 * h) << yaw_deg;  // a panel the rule takes (its default bounds)
+    ASSERT_LT(panel_px, 0.1 * h) << yaw_deg;
+    std::optional<PixelBox> region_off;  // the first line's region without the rule
+    for (const bool on : {false, true}) {
+      RobotOrientationParams params = RobotOrientationParams::loadDefault();
+      ASSERT_GT(params.dark_panel_max_gray_ratio, 0);
+      if (!on) params.dark_panel_max_gray_ratio = 0;
+      const RobotLines lines = untrainedEstimator(params).findLines(img.view(), cam, robot);
+      int on_face = 0;
+      for (const auto& q : lines.silhouette_px) {
+        if (q.x() < std::min(face_l.x, face_r.x) + 3 || q.x() > std::max(face_l.x, face_r.x) - 3)
+          continue;
+        ++on_face;
+        const double z = on ? 0.0 : 0.04;
+        EXPECT_NEAR(q.y(), rowOn(z, q.x()), 2.5) << yaw_deg << " " << on << " " << q.transpose();
+      }
+      EXPECT_GT(on_face, 20) << yaw_deg << " " << on;
+      ASSERT_FALSE(lines.regions.empty()) << yaw_deg;
+      if (!on) {
+        region_off = lines.regions[0].box;
+        continue;
+      }
+      // The region still hangs from the panel's upper edge, where the nets were trained to see it.
+      EXPECT_NEAR(lines.regions[0].box.y0, region_off->y0, 3) << yaw_deg;
+      EXPECT_NEAR(lines.regions[0].box.y1, region_off->y1, 3) << yaw_deg;
+      const Eigen::Vector2d d = lines.regions[0].line_in_robot.direction();
+      EXPECT_GT(std::abs(d.dot(v)), std::cos(4 * std::numbers::pi / 180)) << yaw_deg;
+      // The line lies on the ground edge: its points 0.08 m in front of the centre.
+      const Eigen::Vector2d mid =
+          (lines.regions[0].line_in_robot.a + lines.regions[0].line_in_robot.b) / 2;
+      EXPECT_NEAR((mid - centre).dot(u), -0.08, 0.015) << yaw_deg;
+    }
+  }
+}
+
 TEST(RobotTracks, AssociatesOverFramesAndExpires) {
   OrientationFilterParams filter;
   filter.expiry_s = 1.0;

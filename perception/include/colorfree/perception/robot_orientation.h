@@ -60,6 +60,19 @@ struct RobotOrientationParams {
   /// carpet, a cast shadow's upper edge has only the carpet above it (0: no such test).
   double silhouette_min_above_carpet_ratio = 1.15;
   int silhouette_above_rows_px = 3;  ///< px above an edge whose mean gray is its "above" value
+  /// A back view's heels: a dark panel above the ground, the white shoe above it. Where a
+  /// silhouette edge has, within two rows below it, a stretch whose 3-px mean is darker than
+  /// dark_panel_max_gray_ratio × the carpet's gray, between dark_panel_min_height_fraction and
+  /// dark_panel_max_height_fraction of the box height tall and ending at most
+  /// dark_panel_below_feet_fraction of it below the feet point, on at least
+  /// dark_panel_min_chain_share of its chain's points, the edge is the panel's upper edge: the
+  /// points move to the stretch's lower end, the ground (a contact shadow is thinner, a cast
+  /// shadow runs on). The line regions still hang from the upper edge (the nets' training). 0: off.
+  double dark_panel_max_gray_ratio = 0.7;
+  double dark_panel_min_height_fraction = 0.045;
+  double dark_panel_max_height_fraction = 0.1;
+  double dark_panel_below_feet_fraction = 0.03;
+  double dark_panel_min_chain_share = 0.7;
   double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
   double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
   double second_line_min_length_m = 0.04;
