@@ -374,9 +374,6 @@ LineHypothesis refineLine(const LineHypothesis& line, const std::vector<Eigen::V
   out.votes = static_cast<int>(in.size());
   return out;
 }
-}  // namespace
-
-namespace {
 
 struct DarkPanel {
   double max_gray;         ///< a panel's pixels are darker than this (the 3-px mean of a row)
@@ -680,7 +677,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     const auto b = camera.robotToPixel({line->b.x(), line->b.y(), 0});
     if (!a || !b) continue;
     // The region hangs from the edges the silhouette found (a panel's upper edge), where the nets
-    // were trained to see it: the line's points moved below panels, on average, move it back up.
+    // were trained to see it: the mean move of the silhouette points between the line's ends
+    // moves it back up.
     double up = 0;
     int n_up = 0;
     for (std::size_t k = 0; k < panel_rows.size(); ++k) {
