@@ -1461,6 +1461,21 @@ RobotOrientationEstimator untrainedEstimator(
   return RobotOrientationEstimator(params, FieldDimensions::loadDefault(), net(3), net(4));
 }
 
+// The robot percept of a drawn block (its image outline `hull`, its centre on the ground) as the
+// proposer gives it: the feet point at the outline's lowest row, the box a robot's size above it.
+RobotPercept perceptOfBlock(const CameraModel& cam, const std::vector<cv::Point>& hull,
+                            const Eigen::Vector2d& centre) {
+  RobotPercept robot;
+  int lowest = 0;
+  for (const auto& q : hull) lowest = std::max(lowest, q.y);
+  robot.feet_px = {cam.robotToPixel({centre.x(), centre.y(), 0})->x(), double(lowest)};
+  const double h = robotSizePx(cam, robot.feet_px).h;
+  robot.box = {robot.feet_px.x() - 0.4 * h, robot.feet_px.y() - h, robot.feet_px.x() + 0.4 * h,
+               robot.feet_px.y() + 0.05 * h};
+  robot.position_in_robot = centre;
+  return robot;
+}
+
 // `shadow_ratio` >= 0: the block casts a dark shadow on the carpet towards the camera and its
 // left (directional light), and the lines generator runs with that above-the-carpet ratio.
 void checkFootBlockLine(double yaw_deg, double shadow_ratio = -1) {
@@ -1498,15 +1513,8 @@ void checkFootBlockLine(double yaw_deg, double shadow_ratio = -1) {
       cv::fillConvexPoly(m, shadow, cv::Scalar(20));
     }
     cv::fillConvexPoly(m, hull, cv::Scalar(200));
-    RobotPercept robot;
-    // As the proposer gives it: the lowest point of the silhouette.
-    int lowest = 0;
-    for (const auto& q : hull) lowest = std::max(lowest, q.y);
-    robot.feet_px = {cam.robotToPixel({centre.x(), centre.y(), 0})->x(), double(lowest)};
-    const double h = robotSizePx(cam, robot.feet_px).h;
-    robot.box = {robot.feet_px.x() - 0.4 * h, robot.feet_px.y() - h, robot.feet_px.x() + 0.4 * h,
-                 robot.feet_px.y() + 0.05 * h};
-    robot.position_in_robot = centre;
+    const RobotPercept robot = perceptOfBlock(cam, hull, centre);
+    const int lowest = static_cast<int>(robot.feet_px.y());
     RobotOrientationParams params = RobotOrientationParams::loadDefault();
     if (shadow_ratio >= 0) params.silhouette_min_above_carpet_ratio = shadow_ratio;
     const RobotLines lines = untrainedEstimator(params).findLines(img.view(), cam, robot);
@@ -1575,14 +1583,8 @@ TEST(LinesGenerator, MovesBelowAHeelPanelToTheGround) {
     const std::vector<cv::Point> panel = {px(-0.08, -0.10, 0), px(-0.08, 0.10, 0),
                                           px(-0.08, 0.10, 0.04), px(-0.08, -0.10, 0.04)};
     cv::fillConvexPoly(m, panel, cv::Scalar(25));
-    RobotPercept robot;
-    int lowest = 0;
-    for (const auto& q : hull) lowest = std::max(lowest, q.y);
-    robot.feet_px = {cam.robotToPixel({centre.x(), centre.y(), 0})->x(), double(lowest)};
+    const RobotPercept robot = perceptOfBlock(cam, hull, centre);
     const double h = robotSizePx(cam, robot.feet_px).h;
-    robot.box = {robot.feet_px.x() - 0.4 * h, robot.feet_px.y() - h, robot.feet_px.x() + 0.4 * h,
-                 robot.feet_px.y() + 0.05 * h};
-    robot.position_in_robot = centre;
     // The face's ground edge and its panel's upper edge, as rows over the face's columns.
     const auto rowOn = [&](double z, double x) {
       const cv::Point l = px(-0.08, -0.10, z), r = px(-0.08, 0.10, z);
