@@ -21,6 +21,11 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.min_wide_group_confidence = f.getInRange("min_wide_group_confidence", 0, 1);
   p.wide_group_shift_width_fraction = f.getInRange("wide_group_shift_width_fraction", 0, 1);
   p.wide_group_min_shift_confidence = f.getInRange("wide_group_min_shift_confidence", 0, 1);
+  p.mirror_min_confidence = f.getInRange("mirror_min_confidence", 0, 1);
+  p.mirror_max_confidence = f.getInRange("mirror_max_confidence", 0, 1);
+  if (p.mirror_min_confidence > p.mirror_max_confidence) {
+    throw Error(path + ": mirror_min_confidence must not exceed mirror_max_confidence");
+  }
   p.min_behind_robot_confidence = f.getInRange("min_behind_robot_confidence", 0, 1);
   p.behind_lower_part_fraction = f.getInRange("behind_lower_part_fraction", 0, 1);
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
@@ -112,7 +117,41 @@ bool insideRows(const PixelBox& box, const GrayView& image) {
   return box.y0 >= 0 && box.y1 <= image.height;
 }
 
+// Whether RobotNet's look at the box is to be checked mirrored (when unsure): not where the image's
+// left, right or bottom border cuts the box (near robots, whose mirrored look RobotNet rejected).
+bool mirrorable(const PixelBox& box, const GrayView& image) {
+  return box.x0 >= 0 && box.x1 <= image.width && box.y1 <= image.height;
+}
+
 }  // namespace
+
+void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, const float* patches,
+                          std::size_t count, std::vector<float>& robot) const {
+  if (count == 0) return;
+  std::vector<float> probs(count * 2);
+  net_.run(patches, static_cast<int>(count), probs.data());
+  const std::size_t n = static_cast<std::size_t>(net_.input().size());
+  std::vector<std::size_t> unsure;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (probs[2 * i + 1] >= params_.mirror_min_confidence &&
+        probs[2 * i + 1] < params_.mirror_max_confidence && mirrorable(boxes[i].box, image)) {
+      unsure.push_back(i);
+    }
+  }
+  if (!unsure.empty()) {
+    std::vector<float> mirrored(unsure.size() * n), mirrored_probs(unsure.size() * 2);
+    for (std::size_t k = 0; k < unsure.size(); ++k) {
+      cnn::mirrorPatch(patches + unsure[k] * n, net_.input().width, net_.input().height,
+                       mirrored.data() + k * n);
+    }
+    net_.run(mirrored.data(), static_cast<int>(unsure.size()), mirrored_probs.data());
+    for (std::size_t k = 0; k < unsure.size(); ++k) {
+      float& p = probs[2 * unsure[k] + 1];
+      p = 0.5f * (p + mirrored_probs[2 * k + 1]);
+    }
+  }
+  for (std::size_t i = 0; i < count; ++i) robot.push_back(probs[2 * i + 1]);
+}
 
 void RobotDetector::shiftWidePieces(const GrayView& image, std::vector<RobotProposal>& boxes,
                                     std::size_t count, std::vector<float>& robot,
@@ -143,18 +182,18 @@ void RobotDetector::shiftWidePieces(const GrayView& image, std::vector<RobotProp
       moved.push_back(m);
     }
   }
-  std::vector<float> inputs(moved.size() * n), probs(moved.size() * 2);
+  std::vector<float> inputs(moved.size() * n), moved_robot;
   for (std::size_t j = 0; j < moved.size(); ++j) {
     cnn::extractPatch(image, robotPatchBox(moved[j]), in.width, in.height,
                       net_.net().normalization(), inputs.data() + j * n);
   }
-  net_.run(inputs.data(), static_cast<int>(moved.size()), probs.data());
+  score(image, moved.data(), inputs.data(), moved.size(), moved_robot);
   for (std::size_t w = 0; w < which.size(); ++w) {
     const std::size_t i = which[w];
     for (std::size_t j = w * kLooks; j < (w + 1) * kLooks; ++j) {
-      if (probs[2 * j + 1] <= robot[i]) continue;
+      if (moved_robot[j] <= robot[i]) continue;
       boxes[i] = moved[j];
-      robot[i] = probs[2 * j + 1];
+      robot[i] = moved_robot[j];
       std::copy_n(inputs.data() + j * n, n, patches.data() + i * n);
     }
   }
@@ -362,10 +401,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       cnn::extractPatch(image, robotPatchBox(seen[i]), in.width, in.height,
                         net_.net().normalization(), patches.data() + i * patch_size);
     }
-    std::vector<float> probs((seen.size() - from) * 2);
-    net_.run(patches.data() + from * patch_size, static_cast<int>(seen.size() - from),
-             probs.data());
-    for (std::size_t i = 0; i < seen.size() - from; ++i) robot.push_back(probs[2 * i + 1]);
+    score(image, seen.data() + from, patches.data() + from * patch_size, seen.size() - from, robot);
   };
   // With candidates behind robots looked at, every held-back candidate is classified: all in one
   // batch with the proposals.

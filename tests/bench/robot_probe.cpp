@@ -86,6 +86,8 @@ int probe(int argc, char** argv) {
   env("RD_SHIFT", config.robot_detector.wide_group_shift_width_fraction);
   env("RD_SHIFTMIN", config.robot_detector.wide_group_min_shift_confidence);
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
+  env("RD_MIRLO", config.robot_detector.mirror_min_confidence);
+  env("RD_MIRHI", config.robot_detector.mirror_max_confidence);
   env("RD_SHINFILL", config.robot_detector.shin_min_fill_fraction);
   env("RD_SHINGAP", config.robot_detector.shin_gap_height_fraction);
   env("RD_SHINMIN", config.robot_detector.shin_min_height_fraction);

@@ -280,6 +280,15 @@ TEST(CnnPatch, StandardisesWithSixteenPartialSumsOfRoundedSquares) {
 // The unsharp mask: a flat patch stays flat; a blurred step (a soft lens's edge) gets steeper,
 // keeps its mean, and over- and undershoots its two levels, symmetrically; a single bright pixel is
 // v + a (v - G v) exactly where G's weights are known; bad sizes and values are refused.
+TEST(CnnPatch, MirrorReversesEachRow) {
+  std::vector<float> in(5 * 3), out(5 * 3, -1.0f);
+  for (int i = 0; i < 15; ++i) in[i] = static_cast<float>(i * i);
+  mirrorPatch(in.data(), 5, 3, out.data());
+  for (int y = 0; y < 3; ++y) {
+    for (int x = 0; x < 5; ++x) EXPECT_EQ(out[y * 5 + x], in[y * 5 + 4 - x]) << x << "," << y;
+  }
+}
+
 TEST(CnnPatch, UnsharpMaskSteepensEdgesAndLeavesFlatPatchesAlone) {
   std::vector<float> flat(26 * 26, 90.0f);
   unsharpMask(flat.data(), 26, 26, 2.0, 4.0);

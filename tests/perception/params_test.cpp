@@ -132,6 +132,11 @@ TEST(StageParams, ImpossibleCombinationsAreErrors) {
   const std::string shins = writeTemp("shins.yaml", withValue(detector, "shin_min_height_fraction", "0.5"));
   expectErrorNaming([](const std::string& f) { RobotDetectorParams::load(f); }, shins,
                     "shin_min_height_fraction", "a shin's least height over its greatest accepted");
+  const std::string mirror =
+      writeTemp("mirror.yaml", withValue(detector, "mirror_min_confidence", "0.9"));
+  expectErrorNaming([](const std::string& f) { RobotDetectorParams::load(f); }, mirror,
+                    "mirror_min_confidence",
+                    "a mirrored look's band with its lower bound above its upper");
 }
 
 TEST(StageParams, AnEvenSmoothingWidthIsAnError) {

@@ -7,12 +7,13 @@
 #include <random>
 
 #include "colorfree/perception/cnn/net.h"
+#include "colorfree/perception/cnn/patch.h"
 #include "colorfree/perception/cnn/shipped_nets.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/high_contrast.h"
+#include "colorfree/perception/noise.h"
 #include "colorfree/perception/robot_detector.h"
 #include "colorfree/perception/robot_orientation.h"
-#include "colorfree/perception/noise.h"
 #include "colorfree/perception/robot_proposer.h"
 #include "synthetic_field.h"
 
@@ -1174,6 +1175,85 @@ TEST(RobotDetector, FeetNetMovesAnAcceptedBoxToTheRobotsFeet) {
   // A feet net of the wrong shape is refused.
   EXPECT_THROW(
       RobotDetector(params, cnn::Classifier(brightness), dims, cnn::Classifier(brightness)), Error);
+}
+
+TEST(RobotDetector, AnUnsureBoxIsScoredByTheMeanOfItsLookAndItsMirroredLook) {
+  // A box bright on its left half only, and a stand-in net that tells left from right: its robot
+  // logit is beta + a x (the left half's mean - the right half's) / 2 of the patch (unit range).
+  GrayImage img = carpet(13);
+  cv::rectangle(wrap(img), cv::Point(300, 100), cv::Point(329, 219), cv::Scalar(230), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const RobotProposal box = proposal(pixelBox(300, 100, 360, 220));
+  std::vector<float> patch(24 * 24);
+  cnn::extractPatch(img.view(), robotPatchBox(box), 24, 24, cnn::PatchNormalization::kUnitRange,
+                    patch.data());
+  double left = 0, right = 0;
+  for (int y = 0; y < 24; ++y) {
+    for (int x = 0; x < 24; ++x) (x < 12 ? left : right) += patch[y * 24 + x] / 288.0;
+  }
+  ASSERT_GT(left - right, 0.3);
+  // The look scores 0.65, the mirrored look 0.15: their mean 0.4 is under the bar of 0.5.
+  const auto logit = [](double p) { return std::log(p / (1 - p)); };
+  const double beta = 0.5 * (logit(0.65) + logit(0.15));
+  const double a = (logit(0.65) - beta) / (0.5 * (left - right));
+  cnn::Net sided = cnn::parseDarknetCfg(
+      "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
+      "[connected]\noutput=2\nactivation=linear\n\n[softmax]\n",
+      "sided net");
+  std::vector<float>& w = sided.params();  // biases (no robot, robot), then weights per class
+  ASSERT_EQ(w.size(), 2u + 2u * 576u);
+  w[1] = static_cast<float>(beta);
+  for (int y = 0; y < 24; ++y) {
+    for (int x = 0; x < 24; ++x)
+      w[2 + 576 + y * 24 + x] = static_cast<float>((x < 12 ? a : -a) / 576);
+  }
+  const auto runOn = [&](const RobotProposal& b, double lo, double hi,
+                         std::vector<float>& confidences) {
+    RobotDetectorParams params;
+    params.mirror_min_confidence = lo;
+    params.mirror_max_confidence = hi;
+    params.shin_gap_height_fraction = 0;
+    return RobotDetector(params, cnn::Classifier(sided))
+        .run(img.view(), cam, {b}, {}, nullptr, &confidences);
+  };
+  const auto run = [&](double lo, double hi, std::vector<float>& confidences) {
+    return runOn(box, lo, hi, confidences);
+  };
+  std::vector<float> confidences;
+  // Never mirrored (equal bounds), or 0.65 outside the band: the look alone, a robot.
+  for (const auto& [lo, hi] : {std::pair{0.0, 0.0}, {0.3, 0.6}, {0.7, 0.8}}) {
+    SCOPED_TRACE(lo);
+    EXPECT_EQ(run(lo, hi, confidences).size(), 1u);
+    ASSERT_EQ(confidences.size(), 1u);
+    EXPECT_NEAR(confidences[0], 0.65, 1e-4);
+  }
+  // Within the band: the mean of both looks, no robot.
+  EXPECT_TRUE(run(0.3, 0.8, confidences).empty());
+  ASSERT_EQ(confidences.size(), 1u);
+  EXPECT_NEAR(confidences[0], 0.4, 1e-4);
+  // Boxes the image's border cuts, every look mirrored (band 0 to 1): the look alone where the
+  // left, right or bottom border cuts it, the mean of both where the top does.
+  cv::rectangle(wrap(img), cv::Point(15, 100), cv::Point(29, 219), cv::Scalar(230), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(0, 380), cv::Point(29, 479), cv::Scalar(230), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(610, 100), cv::Point(624, 219), cv::Scalar(230), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(300, 0), cv::Point(329, 99), cv::Scalar(230), cv::FILLED);
+  const std::vector<std::pair<PixelBox, bool>> cut = {{pixelBox(-30, 100, 30, 220), false},
+                                                      {pixelBox(610, 100, 670, 220), false},
+                                                      {pixelBox(0, 380, 60, 500), false},
+                                                      {pixelBox(300, -20, 360, 100), true}};
+  for (const auto& [b, mirrored] : cut) {
+    SCOPED_TRACE(b.x0);
+    std::vector<float> own, both;
+    runOn(proposal(b), 0, 0, own);
+    runOn(proposal(b), 0, 1, both);
+    ASSERT_EQ(own.size(), 1u);
+    ASSERT_EQ(both.size(), 1u);
+    if (mirrored) {
+      EXPECT_GT(std::abs(both[0] - own[0]), 0.05);
+    } else {
+      EXPECT_EQ(both[0], own[0]);
+    }
+  }
 }
 
 TEST(RobotDetector, ABoxBehindARobotOverlappingItLikeARobotIsItsKneeOrHand) {

@@ -48,6 +48,12 @@ __attribute__((noinline, optimize("fp-contract=off"))) int partialSums(const flo
 }
 }  // namespace
 
+void mirrorPatch(const float* in, int width, int height, float* out) {
+  for (int y = 0; y < height; ++y) {
+    std::reverse_copy(in + y * width, in + (y + 1) * width, out + y * width);
+  }
+}
+
 void normalizePatch(float* values, int count, PatchNormalization normalization) {
   if (normalization == PatchNormalization::kUnitRange) {
     constexpr float kScale = 1.0f / 255.0f;

@@ -31,6 +31,13 @@ struct RobotDetectorParams {
   /// and the best-scored of the five stays (shiftWidePieces; 0: never).
   double wide_group_shift_width_fraction = 0.125;
   double wide_group_min_shift_confidence = 0.2;
+  /// A box RobotNet scores from mirror_min_confidence to under mirror_max_confidence is looked at
+  /// mirrored left to right too, and its score is the mean of the two looks (RobotNet learnt from
+  /// mirrored samples: a robot mirrored is a robot, and an unsure look is seldom unsure the same
+  /// way twice). Not where the image's left, right or bottom border cuts the box (near robots:
+  /// RobotNet rejected their mirrored looks). Equal bounds: never.
+  double mirror_min_confidence = 0.3;
+  double mirror_max_confidence = 0.8;
   /// A held-back candidate behind a nearer box RobotNet accepted is a robot standing behind that
   /// one (its feet at the nearer robot's knees or hands in the image), or the nearer robot's own
   /// knee, crotch or hand. It is classified too and takes part in the choice of percepts at this
@@ -160,6 +167,10 @@ class RobotDetector {
   /// for every box as it was. Only with the net and feet_max_steps > 0.
   void moveFeet(const GrayView& image, const CameraModel& camera, std::vector<RobotProposal>& boxes,
                 const std::vector<int>& which, const std::vector<float>& robot_net_patches) const;
+  /// RobotNet's robot probabilities of the `count` inputs in `patches`, those of `boxes`, with the
+  /// mirrored look where it is unsure (see mirror_min_confidence), appended to `robot`.
+  void score(const GrayView& image, const RobotProposal* boxes, const float* patches,
+             std::size_t count, std::vector<float>& robot) const;
   /// The pieces of wide groups among the first `count` of `boxes` moved sideways to where RobotNet
   /// scores them best (see wide_group_shift_width_fraction), with their scores in `robot` and their
   /// RobotNet inputs in `patches`, all in one batch.

@@ -28,6 +28,9 @@ inline constexpr float kMinStddev = 4.0f;
 void extractPatch(const GrayView& image, const PatchBox& box, int width, int height,
                   PatchNormalization normalization, float* out);
 
+/// The width × height patch `in` (rows top-down) mirrored left to right into `out` (not `in`).
+void mirrorPatch(const float* in, int width, int height, float* out);
+
 /// Normalises `count` grey values (0..255) in place.
 void normalizePatch(float* values, int count, PatchNormalization normalization);
 
