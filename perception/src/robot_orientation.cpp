@@ -1,13 +1,14 @@
 #include "colorfree/perception/robot_orientation.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <Eigen/Eigenvalues>
 
+#include "colorfree/perception/cnn/patch.h"
 #include "colorfree/perception/cnn/shipped_nets.h"
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/param_file.h"
@@ -49,6 +50,7 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.min_usable_confidence = f.getInRange("min_usable_confidence", 0, 1);
   p.min_side_confidence = f.getInRange("min_side_confidence", 0, 1);
   p.min_side_facing_share = f.getInRange("min_side_facing_share", 0.5, 1);
+  p.ori_net_mirrored_look = f.getInRange("ori_net_mirrored_look", 0, 1) > 0;
   p.keep_most_confident_of_a_class = f.getInRange("keep_most_confident_of_a_class", 0, 1) > 0;
   p.track_max_distance_m = f.getInRange("track_max_distance_m", 0, 10);
   p.track_expiry_s = f.getInRange("track_expiry_s", 0, 60);
@@ -724,6 +726,26 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
     accepted.push_back(boxes[i]);
   }
   if (!accepted.empty()) ori_.classify(image, accepted, sides);
+  if (params_.ori_net_mirrored_look && !accepted.empty()) {
+    // A region mirrored shows the same robot facing the other way in the image: the mirrored
+    // look's side classes are swapped (OriNet never learnt from mirrored side regions).
+    const cnn::Shape& in = ori_.input();
+    const std::size_t n = static_cast<std::size_t>(in.size());
+    std::vector<float> patch(n), mirrored(accepted.size() * n), mirrored_sides;
+    for (std::size_t i = 0; i < accepted.size(); ++i) {
+      cnn::extractPatch(image, accepted[i], in.width, in.height, ori_.net().normalization(),
+                        patch.data());
+      cnn::mirrorPatch(patch.data(), in.width, in.height, mirrored.data() + i * n);
+    }
+    mirrored_sides.resize(accepted.size() * 4);
+    ori_.run(mirrored.data(), static_cast<int>(accepted.size()), mirrored_sides.data());
+    for (std::size_t i = 0; i < accepted.size(); ++i) {
+      float* s = &sides[4 * i];
+      const float* m = &mirrored_sides[4 * i];
+      const float swapped[4] = {m[0], m[1], m[3], m[2]};
+      for (int c = 0; c < 4; ++c) s[c] = 0.5f * (s[c] + swapped[c]);
+    }
+  }
   Eigen::Vector2d position = Eigen::Vector2d::Zero();
   if (robot.position_in_robot) {
     position = *robot.position_in_robot;

@@ -1636,6 +1636,74 @@ TEST(LinesGenerator, IgnoresTheCastShadowBelowAFootBlock) {
   }
 }
 
+// OriNet looks at each region as it is and mirrored, the mirrored look's side classes swapped: a
+// stand-in OriNet that says "side facing left" more surely when a region's left half is the
+// brighter (logit 2 as it is, 1 mirrored, against 0 for the front) gives a side region of unknown
+// facing (0.44 left, 0.37 right); with one look, 0.88 facing left.
+TEST(RobotOrientation, OriNetsMirroredLookHasItsSideClassesSwapped) {
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(5);
+  const Eigen::Vector2d centre(1.2, 0.0);
+  const double yaw = 20 * std::numbers::pi / 180;
+  const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw)), v(-std::sin(yaw), std::cos(yaw));
+  std::vector<cv::Point> pts, hull;
+  for (double a : {-0.08, 0.08})
+    for (double b : {-0.10, 0.10})
+      for (double z : {0.0, 0.05}) {
+        const Eigen::Vector2d g = centre + a * u + b * v;
+        const auto q = cam.robotToPixel({g.x(), g.y(), z});
+        pts.emplace_back(int(std::lround(q->x())), int(std::lround(q->y())));
+      }
+  cv::convexHull(pts, hull);
+  cv::fillConvexPoly(wrap(img), hull, cv::Scalar(200));
+  const RobotPercept robot = perceptOfBlock(cam, hull, centre);
+  RobotOrientationParams params = RobotOrientationParams::loadDefault();
+  const RobotLines lines = untrainedEstimator(params).findLines(img.view(), cam, robot);
+  ASSERT_FALSE(lines.regions.empty());
+  const PixelBox& r = lines.regions[0].box;
+  std::vector<float> patch(24 * 24);
+  cnn::extractPatch(img.view(), {float(r.x0), float(r.y0), float(r.width()), float(r.height())}, 24,
+                    24, cnn::PatchNormalization::kStandardize, patch.data());
+  double d = 0;  // (the left half's mean - the right half's) / 2
+  for (int y = 0; y < 24; ++y) {
+    for (int x = 0; x < 24; ++x) d += (x < 12 ? 0.5 : -0.5) * patch[y * 24 + x] / 288.0;
+  }
+  ASSERT_GT(std::abs(d), 0.02);
+  const double k = 0.5 / d, beta = 1.5;  // logits 2 as it is, 1 mirrored
+  cnn::Net usable = cnn::parseDarknetCfg(
+      "# colorfree normalization=standardize\n[net]\nwidth=12\nheight=12\nchannels=1\n\n"
+      "[connected]\noutput=2\nactivation=linear\n\n[softmax]\n",
+      "usable net");
+  usable.params()[1] = 20;  // every region usable
+  cnn::Net sided = cnn::parseDarknetCfg(
+      "# colorfree normalization=standardize\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
+      "[connected]\noutput=4\nactivation=linear\n\n[softmax]\n",
+      "sided ori net");
+  std::vector<float>& w = sided.params();  // biases (front, back, left, right), then weights
+  w[0] = 0;
+  w[1] = w[3] = -20;
+  w[2] = static_cast<float>(beta);
+  for (int y = 0; y < 24; ++y) {
+    for (int x = 0; x < 24; ++x) w[4 + 2 * 576 + y * 24 + x] = float((x < 12 ? k : -k) / 576);
+  }
+  for (const bool mirrored : {true, false}) {
+    SCOPED_TRACE(mirrored);
+    params.ori_net_mirrored_look = mirrored;
+    const RobotLines out =
+        RobotOrientationEstimator(params, FieldDimensions::loadDefault(), cnn::Classifier(usable),
+                                  cnn::Classifier(sided))
+            .estimate(img.view(), cam, robot);
+    ASSERT_FALSE(out.regions.empty());
+    const LineRegion& g = out.regions[0];
+    ASSERT_TRUE(g.side.has_value());
+    EXPECT_EQ(*g.side, RobotSide::kSide);
+    const double left = 1 / (1 + std::exp(-2.0)), left_mirrored = 1 / (1 + std::exp(-1.0));
+    EXPECT_NEAR(g.side_confidence, mirrored ? 0.5 * (left + left_mirrored) : left, 1e-3);
+    EXPECT_EQ(g.side_facing_known, !mirrored);
+    if (!mirrored) EXPECT_TRUE(g.faces_left);
+  }
+}
+
 // A back view's heels: a dark panel on the block's near face from the ground up to 0.04 m, the
 // white shoe above it. The silhouette's edge is the panel's upper edge (white above dark); below
 // the panel the points move to its lower end, the ground: the line lies on the face's ground edge.

@@ -89,6 +89,8 @@ struct RobotOrientationParams {
   double min_usable_confidence = 0.35;       ///< OriBoostNet's usable probability needed
   double min_side_confidence = 0.5;          ///< OriNet's best class probability needed (its two side classes summed)
   double min_side_facing_share = 0.7;        ///< a side region's facing is known when one side class has this share of the side probability
+  bool ori_net_mirrored_look = true;  ///< OriNet also looks at each region mirrored (its side
+                                      ///< classes swapped): its classes are the mean of both looks
   bool keep_most_confident_of_a_class = true;  ///< regions that share a class: keep OriNet's most confident one (false: drop all, the paper's check)
   double track_max_distance_m = 0.5;         ///< association of a percept with a track
   double track_expiry_s = 1.0;               ///< a track and its estimate expire after this without samples
