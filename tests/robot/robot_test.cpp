@@ -1556,6 +1556,24 @@ RobotPercept perceptOfBlock(const CameraModel& cam, const std::vector<cv::Point>
   return robot;
 }
 
+// The image outline of a block on the ground (both feet seen together), 0.16 deep, 0.20 wide and
+// 0.05 high, about `centre`, turned by `yaw_deg`.
+std::vector<cv::Point> footBlockHull(const CameraModel& cam, const Eigen::Vector2d& centre,
+                                     double yaw_deg) {
+  const double yaw = yaw_deg * std::numbers::pi / 180;
+  const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw)), v(-std::sin(yaw), std::cos(yaw));
+  std::vector<cv::Point> pts, hull;
+  for (double a : {-0.08, 0.08})
+    for (double b : {-0.10, 0.10})
+      for (double z : {0.0, 0.05}) {
+        const Eigen::Vector2d g = centre + a * u + b * v;
+        const auto p = cam.robotToPixel({g.x(), g.y(), z});
+        pts.emplace_back(int(std::lround(p->x())), int(std::lround(p->y())));
+      }
+  cv::convexHull(pts, hull);
+  return hull;
+}
+
 // `shadow_ratio` >= 0: the block casts a dark shadow on the carpet towards the camera and its
 // left (directional light), and the lines generator runs with that above-the-carpet ratio.
 void checkFootBlockLine(double yaw_deg, double shadow_ratio = -1) {
@@ -1566,16 +1584,7 @@ void checkFootBlockLine(double yaw_deg, double shadow_ratio = -1) {
     const Eigen::Vector2d centre(1.2, 0.0);
     const double yaw = yaw_deg * std::numbers::pi / 180;
     const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw)), v(-std::sin(yaw), std::cos(yaw));
-    std::vector<cv::Point> pts;
-    for (double a : {-0.08, 0.08})
-      for (double b : {-0.10, 0.10})
-        for (double z : {0.0, 0.05}) {
-          const Eigen::Vector2d g = centre + a * u + b * v;
-          const auto p = cam.robotToPixel({g.x(), g.y(), z});
-          pts.emplace_back(int(std::lround(p->x())), int(std::lround(p->y())));
-        }
-    std::vector<cv::Point> hull;
-    cv::convexHull(pts, hull);
+    const std::vector<cv::Point> hull = footBlockHull(cam, centre, yaw_deg);
     cv::Mat m = wrap(img);
     if (shadow_ratio >= 0) {
       // The shadow: the block's footprint swept along the light on the ground, towards the camera
@@ -1644,17 +1653,7 @@ TEST(RobotOrientation, OriNetsMirroredLookHasItsSideClassesSwapped) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(5);
   const Eigen::Vector2d centre(1.2, 0.0);
-  const double yaw = 20 * std::numbers::pi / 180;
-  const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw)), v(-std::sin(yaw), std::cos(yaw));
-  std::vector<cv::Point> pts, hull;
-  for (double a : {-0.08, 0.08})
-    for (double b : {-0.10, 0.10})
-      for (double z : {0.0, 0.05}) {
-        const Eigen::Vector2d g = centre + a * u + b * v;
-        const auto q = cam.robotToPixel({g.x(), g.y(), z});
-        pts.emplace_back(int(std::lround(q->x())), int(std::lround(q->y())));
-      }
-  cv::convexHull(pts, hull);
+  const std::vector<cv::Point> hull = footBlockHull(cam, centre, 20);
   cv::fillConvexPoly(wrap(img), hull, cv::Scalar(200));
   const RobotPercept robot = perceptOfBlock(cam, hull, centre);
   RobotOrientationParams params = RobotOrientationParams::loadDefault();
