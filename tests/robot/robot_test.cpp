@@ -1699,7 +1699,9 @@ TEST(RobotOrientation, OriNetsMirroredLookHasItsSideClassesSwapped) {
     const double left = 1 / (1 + std::exp(-2.0)), left_mirrored = 1 / (1 + std::exp(-1.0));
     EXPECT_NEAR(g.side_confidence, mirrored ? 0.5 * (left + left_mirrored) : left, 1e-3);
     EXPECT_EQ(g.side_facing_known, !mirrored);
-    if (!mirrored) EXPECT_TRUE(g.faces_left);
+    if (!mirrored) {
+      EXPECT_TRUE(g.faces_left);
+    }
   }
 }
 
