@@ -725,25 +725,32 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
     accepted_index[i] = static_cast<int>(accepted.size());
     accepted.push_back(boxes[i]);
   }
-  if (!accepted.empty()) ori_.classify(image, accepted, sides);
-  if (params_.ori_net_mirrored_look && !accepted.empty()) {
-    // A region mirrored shows the same robot facing the other way in the image: the mirrored
-    // look's side classes are swapped (OriNet never learnt from mirrored side regions).
+  if (!accepted.empty()) {
+    // OriNet's inputs, extracted once: as they are, then (with the mirrored look) mirrored. A
+    // region mirrored shows the same robot facing the other way in the image: the mirrored look's
+    // side classes are swapped (OriNet never learnt from mirrored side regions).
     const cnn::Shape& in = ori_.input();
     const std::size_t n = static_cast<std::size_t>(in.size());
-    std::vector<float> patch(n), mirrored(accepted.size() * n), mirrored_sides;
-    for (std::size_t i = 0; i < accepted.size(); ++i) {
+    const std::size_t count = accepted.size();
+    std::vector<float> inputs(count * n);
+    for (std::size_t i = 0; i < count; ++i) {
       cnn::extractPatch(image, accepted[i], in.width, in.height, ori_.net().normalization(),
-                        patch.data());
-      cnn::mirrorPatch(patch.data(), in.width, in.height, mirrored.data() + i * n);
+                        inputs.data() + i * n);
     }
-    mirrored_sides.resize(accepted.size() * 4);
-    ori_.run(mirrored.data(), static_cast<int>(accepted.size()), mirrored_sides.data());
-    for (std::size_t i = 0; i < accepted.size(); ++i) {
-      float* s = &sides[4 * i];
-      const float* m = &mirrored_sides[4 * i];
-      const float swapped[4] = {m[0], m[1], m[3], m[2]};
-      for (int c = 0; c < 4; ++c) s[c] = 0.5f * (s[c] + swapped[c]);
+    sides.resize(count * 4);
+    ori_.run(inputs.data(), static_cast<int>(count), sides.data());
+    if (params_.ori_net_mirrored_look) {
+      std::vector<float> mirrored(count * n), mirrored_sides(count * 4);
+      for (std::size_t i = 0; i < count; ++i) {
+        cnn::mirrorPatch(inputs.data() + i * n, in.width, in.height, mirrored.data() + i * n);
+      }
+      ori_.run(mirrored.data(), static_cast<int>(count), mirrored_sides.data());
+      for (std::size_t i = 0; i < count; ++i) {
+        float* s = &sides[4 * i];
+        const float* m = &mirrored_sides[4 * i];
+        const float swapped[4] = {m[0], m[1], m[3], m[2]};
+        for (int c = 0; c < 4; ++c) s[c] = 0.5f * (s[c] + swapped[c]);
+      }
     }
   }
   Eigen::Vector2d position = Eigen::Vector2d::Zero();
