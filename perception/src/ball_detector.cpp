@@ -264,7 +264,7 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     for (std::size_t m = 0; m < sharpened.size(); ++m) {
       float* v = &inputs[m * count];
       cnn::extractPatch(image, kept_boxes[sharpened[m]], in.width, in.height,
-                        cnn::PatchNormalization::kUnitRange, v);
+                        cnn::PatchNormalization::kUnitRange, v, ball_net_.net().resampling());
       for (int j = 0; j < count; ++j) v[j] *= 255.0f;  // grey levels: kMinStddev is in them
       cnn::unsharpMask(v, in.width, in.height, sigma_px, params_.sharpen_amount);
       cnn::normalizePatch(v, count, ball_net_.net().normalization());

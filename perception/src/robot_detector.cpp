@@ -185,7 +185,7 @@ void RobotDetector::shiftWidePieces(const GrayView& image, std::vector<RobotProp
   std::vector<float> inputs(moved.size() * n), moved_robot;
   for (std::size_t j = 0; j < moved.size(); ++j) {
     cnn::extractPatch(image, robotPatchBox(moved[j]), in.width, in.height,
-                      net_.net().normalization(), inputs.data() + j * n);
+                      net_.net().normalization(), inputs.data() + j * n, net_.net().resampling());
   }
   score(image, moved.data(), inputs.data(), moved.size(), moved_robot);
   for (std::size_t w = 0; w < which.size(); ++w) {
@@ -205,7 +205,8 @@ void RobotDetector::moveFeet(const GrayView& image, const CameraModel& camera,
   if (which.empty()) return;
   const cnn::Shape& in = feet_net_->input();
   const std::size_t n = static_cast<std::size_t>(in.size());
-  const bool same_input = feet_net_->net().normalization() == net_.net().normalization();
+  const bool same_input = feet_net_->net().normalization() == net_.net().normalization() &&
+                          feet_net_->net().resampling() == net_.net().resampling();
   std::vector<int> moving = which;
   std::vector<int> last(boxes.size(), 0);  // the direction of each box's last step
   std::vector<float> inputs(which.size() * n);
@@ -217,7 +218,8 @@ void RobotDetector::moveFeet(const GrayView& image, const CameraModel& camera,
         std::copy_n(robot_net_patches.data() + moving[k] * n, n, inputs.data() + k * n);
       } else {
         cnn::extractPatch(image, robotPatchBox(boxes[moving[k]]), in.width, in.height,
-                          feet_net_->net().normalization(), inputs.data() + k * n);
+                          feet_net_->net().normalization(), inputs.data() + k * n,
+                          feet_net_->net().resampling());
       }
     }
     feet_net_->run(inputs.data(), static_cast<int>(moving.size()), probs.data());
@@ -399,7 +401,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     patches.resize(seen.size() * patch_size);
     for (std::size_t i = from; i < seen.size(); ++i) {
       cnn::extractPatch(image, robotPatchBox(seen[i]), in.width, in.height,
-                        net_.net().normalization(), patches.data() + i * patch_size);
+                        net_.net().normalization(), patches.data() + i * patch_size,
+                        net_.net().resampling());
     }
     score(image, seen.data() + from, patches.data() + from * patch_size, seen.size() - from, robot);
   };

@@ -735,7 +735,7 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
     std::vector<float> inputs(count * n);
     for (std::size_t i = 0; i < count; ++i) {
       cnn::extractPatch(image, accepted[i], in.width, in.height, ori_.net().normalization(),
-                        inputs.data() + i * n);
+                        inputs.data() + i * n, ori_.net().resampling());
     }
     sides.resize(count * 4);
     ori_.run(inputs.data(), static_cast<int>(count), sides.data());

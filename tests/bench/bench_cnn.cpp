@@ -77,7 +77,9 @@ void opencv(benchmark::State& state, const std::string& name) {
   perPatch(state, batch);
 }
 
-// Crop, resize and normalise 16 boxes of a 640x480 frame to 24x24 (a robot proposal's size).
+// Crop, resize and normalise 16 boxes of a 640x480 frame to side x side: arguments side,
+// resampling (0 bilinear, 1 area) and the box (0: 60x80, a robot proposal's size; 1: 180x290, a
+// robot 1.2 m away).
 void extraction(benchmark::State& state) {
   GrayImage image(640, 480);
   std::mt19937_64 rng(3);
@@ -86,12 +88,18 @@ void extraction(benchmark::State& state) {
   }
   const int side = static_cast<int>(state.range(0));
   std::vector<float> out(static_cast<std::size_t>(side) * side);
-  std::uniform_real_distribution<float> pos(0.0f, 500.0f);
+  const auto resampling = state.range(1) ? PatchResampling::kArea : PatchResampling::kBilinear;
+  const bool near = state.range(2) != 0;
+  std::uniform_real_distribution<float> pos(0.0f, near ? 400.0f : 500.0f);
   std::vector<PatchBox> boxes;
-  for (int i = 0; i < 16; ++i) boxes.push_back({pos(rng), pos(rng) * 0.7f, 60.0f, 80.0f});
+  for (int i = 0; i < 16; ++i) {
+    boxes.push_back(
+        {pos(rng), pos(rng) * (near ? 0.4f : 0.7f), near ? 180.0f : 60.0f, near ? 290.0f : 80.0f});
+  }
   for (auto _ : state) {
     for (const PatchBox& b : boxes) {
-      extractPatch(image.view(), b, side, side, PatchNormalization::kStandardize, out.data());
+      extractPatch(image.view(), b, side, side, PatchNormalization::kStandardize, out.data(),
+                   resampling);
       benchmark::DoNotOptimize(out.data());
     }
   }
@@ -112,7 +120,13 @@ int registerAll() {
         ->Arg(1)
         ->Arg(16);
   }
-  benchmark::RegisterBenchmark("extract_patch", extraction)->Arg(12)->Arg(24);
+  benchmark::RegisterBenchmark("extract_patch", extraction)
+      ->ArgNames({"side", "area", "near"})
+      ->Args({12, 0, 0})
+      ->Args({24, 0, 0})
+      ->Args({24, 1, 0})
+      ->Args({24, 0, 1})
+      ->Args({24, 1, 1});
   return 0;
 }
 const int kRegistered = registerAll();

@@ -9,7 +9,8 @@
 // With RP_EXACT=1 it also prints every feet point, rejection, proposal and percept of the frame
 // at full precision (to check that a speed-up changes nothing). With RP_SHIFT=1, per demanded
 // robot, RobotNet's score on the proposer-shaped box about its true feet moved by -0.2 to 0.2 of
-// its height (README robot21: RobotNet does not tell where the feet are).
+// its height (README robot21: RobotNet does not tell where the feet are), then moved sideways by
+// -0.2 to 0.2 of its width (XSHIFT; README robot28).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -197,6 +198,19 @@ int probe(int argc, char** argv) {
             std::vector<float> pr;
             shift_net->classify(frame.image, pbs, pr);
             std::printf("     SHIFT h=%.0f", *h0);
+            for (std::size_t k = 0; k < pbs.size(); ++k) std::printf(" %.2f", pr[2 * k + 1]);
+            std::printf("\n");
+            pbs.clear();
+            const double w0 = rpp.box_width_factor * *h0 * config.field.robot_width_m /
+                              config.field.robot_height_m;
+            for (double s : shifts) {
+              const Eigen::Vector2d g(r.ground_px.x() + s * w0, r.ground_px.y());
+              const double y1 = g.y() + rpp.box_below_feet_fraction * *h0;
+              const double y0 = y1 - rpp.box_height_factor * *h0;
+              pbs.push_back({float(g.x() - w0 / 2), float(y0), float(w0), float(y1 - y0)});
+            }
+            shift_net->classify(frame.image, pbs, pr);
+            std::printf("     XSHIFT w=%.0f", w0);
             for (std::size_t k = 0; k < pbs.size(); ++k) std::printf(" %.2f", pr[2 * k + 1]);
             std::printf("\n");
           }

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "colorfree/perception/cnn/classifier.h"
@@ -97,6 +99,18 @@ TEST(CnnNet, CfgAndWeightsRoundTrip) {
   EXPECT_EQ(darknetCfgText(back), darknetCfgText(net));
   EXPECT_EQ(back.normalization(), PatchNormalization::kStandardize);
   EXPECT_FALSE(std::filesystem::exists(tempPath("rt.weights.tmp")));
+}
+
+TEST(CnnNet, TheCfgNamesTheResampling) {
+  const std::string layers = "[net]\nwidth=4\nheight=4\nchannels=1\n[connected]\noutput=2\n";
+  EXPECT_EQ(parseDarknetCfg(layers, "plain").resampling(), PatchResampling::kBilinear);
+  Net area = parseDarknetCfg("# colorfree resampling=area\n" + layers, "area");
+  EXPECT_EQ(area.resampling(), PatchResampling::kArea);
+  EXPECT_EQ(parseDarknetCfg(darknetCfgText(area), "written").resampling(), PatchResampling::kArea);
+  EXPECT_EQ(parseDarknetCfg("# colorfree resampling=bilinear\n" + layers, "b").resampling(),
+            PatchResampling::kBilinear);
+  expectError([&] { parseDarknetCfg("# colorfree resampling=cubic\n" + layers, "cubic.cfg"); },
+              {"cubic.cfg:1", "unknown resampling 'cubic'"});
 }
 
 TEST(CnnNet, InitialisationIsSeeded) {
@@ -246,6 +260,72 @@ TEST(CnnPatch, SameAsThePixelByPixelBilinearSample) {
       }
     }
   }
+}
+
+// Area resampling checked against OpenCV's INTER_AREA (the box a whole multiple of the patch, at
+// whole pixels: each sample the plain mean of its block; with the image's border replicated
+// where the box leaves it), against the bilinear sample where a footprint is one pixel wide,
+// and for what it is for: a fine pattern in a box many times the patch's size averages out
+// instead of aliasing.
+TEST(CnnPatch, AreaResamplingIsOpenCvsInterAreaAndBilinearAtOnePixel) {
+  GrayImage image(97, 61);
+  std::mt19937 rng(13);
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) image.at(x, y) = static_cast<std::uint8_t>(rng());
+  }
+  const cv::Mat mat(image.height(), image.width(), CV_8U, image.data());
+  cv::Mat padded;
+  cv::copyMakeBorder(mat, padded, 40, 40, 40, 40, cv::BORDER_REPLICATE);
+  std::vector<float> out(24 * 24);
+  struct Case {
+    int x, y, w, h, side_x, side_y;
+  };
+  for (const Case& c :
+       {Case{3, 2, 72, 48, 24, 24}, Case{10, 7, 36, 36, 12, 12}, Case{-20, -12, 60, 60, 12, 12},
+        Case{70, 40, 48, 48, 24, 24}, Case{5, 5, 39, 26, 13, 13}}) {
+    extractPatch(image.view(), PatchBox{float(c.x), float(c.y), float(c.w), float(c.h)}, c.side_x,
+                 c.side_y, PatchNormalization::kUnitRange, out.data(), PatchResampling::kArea);
+    cv::Mat expected;
+    cv::resize(padded(cv::Rect(c.x + 40, c.y + 40, c.w, c.h)), expected,
+               cv::Size(c.side_x, c.side_y), 0, 0, cv::INTER_AREA);
+    for (int v = 0; v < c.side_y; ++v) {
+      for (int u = 0; u < c.side_x; ++u) {
+        // INTER_AREA rounds to whole grey levels; ours weighs in 1/256 steps (each weight within
+        // 1/512 of its share, in two axes: about a grey level at most).
+        ASSERT_NEAR(out[v * c.side_x + u] * 255.0f, expected.at<std::uint8_t>(v, u), 1.5f)
+            << c.x << "," << c.y << " " << u << "," << v;
+      }
+    }
+  }
+  // A box the patch's size at fractional positions: every footprint one pixel wide, the bilinear
+  // sample (which weighs in 1/256 steps).
+  std::vector<float> bilinear(24 * 24);
+  for (const PatchBox box : {PatchBox{10.3f, 4.7f, 24, 24}, PatchBox{80.6f, 45.2f, 24, 24},
+                             PatchBox{30.0f, 20.5f, 12, 12}}) {
+    extractPatch(image.view(), box, 24, 24, PatchNormalization::kUnitRange, out.data(),
+                 PatchResampling::kArea);
+    extractPatch(image.view(), box, 24, 24, PatchNormalization::kUnitRange, bilinear.data());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      ASSERT_NEAR(out[i] * 255.0f, bilinear[i] * 255.0f, 1.0f) << box.x_px << " " << i;
+    }
+  }
+  // One-pixel stripes (0 and 200) in a box eight times the patch: the area patch is flat at the
+  // stripes' mean; the bilinear one reads a few pixels per sample and keeps stripes of its own.
+  GrayImage stripes(400, 300);
+  for (int y = 0; y < 300; ++y) {
+    for (int x = 0; x < 400; ++x) stripes.at(x, y) = static_cast<std::uint8_t>(x % 2 ? 200 : 0);
+  }
+  const auto spread = [](const std::vector<float>& p) {
+    const auto [lo, hi] = std::minmax_element(p.begin(), p.end());
+    return (*hi - *lo) * 255.0f;
+  };
+  const PatchBox wide{10.0f, 10.0f, 24 * 8 + 1.3f, 24 * 8};
+  extractPatch(stripes.view(), wide, 24, 24, PatchNormalization::kUnitRange, out.data(),
+               PatchResampling::kArea);
+  extractPatch(stripes.view(), wide, 24, 24, PatchNormalization::kUnitRange, bilinear.data());
+  EXPECT_LT(spread(out), 5.0f);  // the weights' 1/256 steps leave a few grey levels
+  EXPECT_NEAR(out[0] * 255.0f, 100.0f, 1.0f);
+  EXPECT_GT(spread(bilinear), 50.0f);
 }
 
 TEST(CnnPatch, StandardisesWithSixteenPartialSumsOfRoundedSquares) {

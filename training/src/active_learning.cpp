@@ -17,12 +17,15 @@
 
 namespace colorfree::training {
 
-std::vector<cnn::Sample> cutSamples(const GrayImage& image, const std::vector<Candidate>& candidates,
-                                    int size, const std::string& scenario, int frame) {
+std::vector<cnn::Sample> cutSamples(const GrayImage& image,
+                                    const std::vector<Candidate>& candidates, int size,
+                                    cnn::PatchResampling resampling, const std::string& scenario,
+                                    int frame) {
   std::vector<cnn::Sample> out;
   std::vector<float> buf(static_cast<std::size_t>(size) * size);
   for (const Candidate& c : candidates) {
-    cnn::extractPatch(image.view(), c.box, size, size, cnn::PatchNormalization::kUnitRange, buf.data());
+    cnn::extractPatch(image.view(), c.box, size, size, cnn::PatchNormalization::kUnitRange,
+                      buf.data(), resampling);
     cnn::Sample s;
     s.patch = GrayImage(size, size);
     for (int i = 0; i < size * size; ++i) {
@@ -178,7 +181,8 @@ LearnResult learn(const ObjectKind& kind, const LearnConfig& config,
         if (vseen.insert(c.key).second) keep.push_back(c);
       }
       for (std::size_t i = 0; i < nets.size(); ++i) {
-        auto s = cutSamples(fc.image, keep, nets[i].data.width, fc.scenario, fc.frame);
+        auto s = cutSamples(fc.image, keep, nets[i].data.width, nets[i].net.resampling(),
+                            fc.scenario, fc.frame);
         sets[i].samples.insert(sets[i].samples.end(), s.begin(), s.end());
       }
     }
@@ -240,7 +244,8 @@ LearnResult learn(const ObjectKind& kind, const LearnConfig& config,
     }
     rep.new_samples += static_cast<int>(keep.size());
     for (std::size_t i = 0; i < nets.size(); ++i) {
-      auto s = cutSamples(fc.image, keep, nets[i].data.width, fc.scenario, fc.frame);
+      auto s = cutSamples(fc.image, keep, nets[i].data.width, nets[i].net.resampling(), fc.scenario,
+                          fc.frame);
       added[i].insert(added[i].end(), s.begin(), s.end());
     }
   };
@@ -273,7 +278,9 @@ LearnResult learn(const ObjectKind& kind, const LearnConfig& config,
       for (FrameCandidates& fc : frames) {
                                  {
                                    std::vector<Candidate> confident;
-                                   const auto cut = cutSamples(fc.image, fc.candidates, nets[0].data.width, fc.scenario, fc.frame);
+                                   const auto cut =
+                                       cutSamples(fc.image, fc.candidates, nets[0].data.width,
+                                                  nets[0].net.resampling(), fc.scenario, fc.frame);
                                    const auto score = positiveScores(nets[0].net, cut, kind.positiveLabel());
                                    for (std::size_t k = 0; k < fc.candidates.size(); ++k) {
                                      if (fc.candidates[k].label == kind.negativeLabel() &&

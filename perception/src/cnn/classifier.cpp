@@ -86,7 +86,7 @@ void Classifier::classify(const GrayView& image, const std::vector<PatchBox>& bo
     const int m = static_cast<int>(std::min<std::size_t>(kLanes, boxes.size() - start));
     for (int b = 0; b < m; ++b) {
       extractPatch(image, boxes[start + b], net.input().width, net.input().height,
-                   net.normalization(), buffer + static_cast<std::size_t>(b) * n);
+                   net.normalization(), buffer + static_cast<std::size_t>(b) * n, net.resampling());
     }
     run(buffer, m, probabilities.data() + start * k);
   }

@@ -17,6 +17,7 @@ namespace colorfree::cnn {
 namespace {
 
 constexpr const char* kNormalizationComment = "# colorfree normalization=";
+constexpr const char* kResamplingComment = "# colorfree resampling=";
 
 std::string shapeText(const Shape& s) {
   return std::to_string(s.width) + "x" + std::to_string(s.height) + "x" +
@@ -225,6 +226,7 @@ Net parseDarknetCfg(const std::string& text, const std::string& origin) {
   std::string raw;
   int line_no = 0;
   PatchNormalization normalization = PatchNormalization::kStandardize;
+  PatchResampling resampling = PatchResampling::kBilinear;
   while (std::getline(in, raw)) {
     ++line_no;
     std::string line = trim(raw);
@@ -237,6 +239,18 @@ Net parseDarknetCfg(const std::string& text, const std::string& origin) {
       } else {
         throw Error(origin + ":" + std::to_string(line_no) + ": unknown normalization '" + value +
                     "' (standardize, unit)");
+      }
+      continue;
+    }
+    if (line.rfind(kResamplingComment, 0) == 0) {
+      const std::string value = trim(line.substr(std::strlen(kResamplingComment)));
+      if (value == "bilinear") {
+        resampling = PatchResampling::kBilinear;
+      } else if (value == "area") {
+        resampling = PatchResampling::kArea;
+      } else {
+        throw Error(origin + ":" + std::to_string(line_no) + ": unknown resampling '" + value +
+                    "' (bilinear, area)");
       }
       continue;
     }
@@ -332,6 +346,7 @@ Net parseDarknetCfg(const std::string& text, const std::string& origin) {
   }
   Net net(input, std::move(layers), origin);
   net.setNormalization(normalization);
+  net.setResampling(resampling);
   return net;
 }
 
@@ -383,6 +398,7 @@ std::string darknetCfgText(const Net& net) {
   std::ostringstream out;
   out << kNormalizationComment
       << (net.normalization() == PatchNormalization::kStandardize ? "standardize" : "unit") << "\n";
+  if (net.resampling() == PatchResampling::kArea) out << kResamplingComment << "area\n";
   out << "[net]\nwidth=" << net.input().width << "\nheight=" << net.input().height
       << "\nchannels=" << net.input().channels << "\n";
   const auto activation = [](Activation a) { return a == Activation::kLeaky ? "leaky" : "linear"; };

@@ -119,8 +119,91 @@ void unsharpMask(float* values, int width, int height, double sigma_px, double a
   for (std::size_t i = 0; i < blurred.size(); ++i) values[i] += a * (values[i] - blurred[i]);
 }
 
+namespace {
+
+// The pixels one axis's samples average: sample k reads the source pixels start[k] ..
+// start[k] + taps - 1 with the weights weight[j * samples + k] (j = 0 .. taps - 1: a sample
+// with fewer pixels has zero weights after them), in 1/256 steps that add up to 256. The
+// footprint of sample k is max(step, 1) pixels wide about its centre origin + (k + 0.5) step; a
+// pixel i covers [i, i + 1) and weighs its overlap with the footprint over the footprint's width
+// (rounded so that the running sum of weights is the rounded running sum of overlaps). Pixels
+// outside 0..size-1 are the border pixel: a footprint reaching past the border is moved inside
+// it, its outer weight joining the border pixel.
+struct AxisTaps {
+  int taps = 0;
+  std::vector<int> start, weight;
+};
+
+void axisTaps(float origin, float step, int samples, int size, AxisTaps& out) {
+  const double f = std::max(static_cast<double>(step), 1.0), n = size;
+  // At most ceil(f) + 1 pixels per footprint, fewer where it is clamped.
+  const int max_taps = std::min(static_cast<int>(std::ceil(f)) + 1, size);
+  out.start.assign(static_cast<std::size_t>(samples), 0);
+  out.weight.assign(static_cast<std::size_t>(samples) * max_taps, 0);
+  out.taps = 1;
+  for (int k = 0; k < samples; ++k) {
+    const double centre = static_cast<double>(origin) + (k + 0.5) * static_cast<double>(step);
+    const double a = centre - f / 2, b = centre + f / 2;
+    // The footprint's pixels inside the image; the parts beyond it go to the border pixels.
+    const double lo = std::clamp(a, 0.0, n), hi = std::clamp(b, 0.0, n);
+    const int first = std::min(static_cast<int>(lo), size - 1);
+    int last = std::max(first, static_cast<int>(std::ceil(hi)) - 1);
+    last = std::min(last, size - 1);
+    out.start[k] = first;
+    double covered = std::max(0.0, std::min(b, 0.0) - a);  // left of (above) the image
+    long given = 0;
+    for (int i = first; i <= last; ++i) {
+      covered += std::max(0.0, std::min(hi, i + 1.0) - std::max(lo, static_cast<double>(i)));
+      if (i == size - 1) covered += std::max(0.0, b - std::max(a, n));  // right of (below) it
+      const auto upto =
+          i == last ? 256L : static_cast<long>(256.0 * std::min(covered / f, 1.0) + 0.5);
+      out.weight[static_cast<std::size_t>(i - first) * samples + k] =
+          static_cast<int>(upto - given);
+      given = upto;
+    }
+    out.taps = std::max(out.taps, last - first + 1);
+  }
+}
+
+// Separable, in integers: each patch row blends its source rows over the columns its samples
+// read (at most 255 x 256 per column: 16 bits, vectorised), then each sample its columns.
+void extractArea(const GrayView& image, const PatchBox& box, int width, int height, float* out) {
+  thread_local AxisTaps xs, ys;
+  thread_local std::vector<std::uint16_t> mid;
+  axisTaps(box.x_px, box.width_px / static_cast<float>(width), width, image.width, xs);
+  axisTaps(box.y_px, box.height_px / static_cast<float>(height), height, image.height, ys);
+  // The columns the samples read (those past the image's right border have zero weights).
+  const int x_lo = xs.start.front(), span = xs.start.back() + xs.taps - x_lo;
+  const int inside = std::min(span, image.width - x_lo);
+  mid.resize(static_cast<std::size_t>(span));
+  std::uint16_t* __restrict m = mid.data();
+  int column[kMaxPatchSide];
+  for (int u = 0; u < width; ++u) column[u] = xs.start[u] - x_lo;
+  constexpr float kScale = 1.0f / 65536.0f;
+  for (int v = 0; v < height; ++v) {
+    std::fill(m, m + span, std::uint16_t{0});
+    for (int j = 0; j < ys.taps; ++j) {
+      const auto w =
+          static_cast<std::uint16_t>(ys.weight[static_cast<std::size_t>(j) * height + v]);
+      if (w == 0) continue;
+      const std::uint8_t* __restrict r = image.row(ys.start[v] + j) + x_lo;
+      for (int i = 0; i < inside; ++i) m[i] = static_cast<std::uint16_t>(m[i] + w * r[i]);
+    }
+    float* o = out + static_cast<std::size_t>(v) * width;
+    for (int u = 0; u < width; ++u) {
+      int sum = 0;
+      for (int j = 0; j < xs.taps; ++j) {
+        sum += xs.weight[static_cast<std::size_t>(j) * width + u] * m[column[u] + j];
+      }
+      o[u] = static_cast<float>(sum) * kScale;
+    }
+  }
+}
+
+}  // namespace
+
 void extractPatch(const GrayView& image, const PatchBox& box, int width, int height,
-                  PatchNormalization normalization, float* out) {
+                  PatchNormalization normalization, float* out, PatchResampling resampling) {
   if (image.empty()) throw Error("extractPatch: empty image");
   if (width <= 0 || height <= 0 || width > kMaxPatchSide || height > kMaxPatchSide) {
     throw Error("extractPatch: patch size " + std::to_string(width) + "x" + std::to_string(height) +
@@ -129,6 +212,11 @@ void extractPatch(const GrayView& image, const PatchBox& box, int width, int hei
   if (!(box.width_px > 0.0f) || !(box.height_px > 0.0f) || !std::isfinite(box.x_px) ||
       !std::isfinite(box.y_px) || !std::isfinite(box.width_px) || !std::isfinite(box.height_px)) {
     throw Error("extractPatch: box must have a finite position and a positive size");
+  }
+  if (resampling == PatchResampling::kArea) {
+    extractArea(image, box, width, height, out);
+    normalizePatch(out, width * height, normalization);
+    return;
   }
   // Bilinear weights in 1/256 steps: integer arithmetic per pixel, one conversion at the end.
   int x0[kMaxPatchSide], fx[kMaxPatchSide];

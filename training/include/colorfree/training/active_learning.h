@@ -99,8 +99,11 @@ struct LearnResult {
 LearnResult learn(const ObjectKind& kind, const LearnConfig& config,
                   const std::function<void(const std::string&)>& log = {});
 
-/// Samples of `candidates` cut from `image` at `size`×`size` (grey values, not normalised).
-std::vector<cnn::Sample> cutSamples(const GrayImage& image, const std::vector<Candidate>& candidates,
-                                    int size, const std::string& scenario, int frame);
+/// Samples of `candidates` cut from `image` at `size`×`size` with the net's `resampling` (grey
+/// values, not normalised).
+std::vector<cnn::Sample> cutSamples(const GrayImage& image,
+                                    const std::vector<Candidate>& candidates, int size,
+                                    cnn::PatchResampling resampling, const std::string& scenario,
+                                    int frame);
 
 }  // namespace colorfree::training

@@ -72,6 +72,10 @@ class Net {
   /// "# colorfree normalization=standardize|unit", which Darknet and cv::dnn skip).
   PatchNormalization normalization() const { return normalization_; }
   void setNormalization(PatchNormalization n) { normalization_ = n; }
+  /// How boxes are resampled to this net's input (the cfg comment
+  /// "# colorfree resampling=bilinear|area"; bilinear without it).
+  PatchResampling resampling() const { return resampling_; }
+  void setResampling(PatchResampling r) { resampling_ = r; }
 
   /// He-normal weights (for leaky ReLU), zero biases, from a seeded generator.
   void initialise(std::uint64_t seed);
@@ -81,6 +85,7 @@ class Net {
   std::vector<Layer> layers_;
   std::vector<float> params_;
   PatchNormalization normalization_ = PatchNormalization::kStandardize;
+  PatchResampling resampling_ = PatchResampling::kBilinear;
 };
 
 /// Parses a Darknet cfg file (only the layers above); throws colorfree::Error naming the file

@@ -19,14 +19,24 @@ enum class PatchNormalization {
                  ///< lighting-invariant
 };
 
+/// How a box becomes width × height samples.
+enum class PatchResampling {
+  kBilinear,  ///< each sample interpolated between the four pixels about its centre: a box many
+              ///< times the patch's size is read at a few pixels only (aliasing)
+  kArea,      ///< each sample the mean of the box's pixels under its footprint (its share of the
+              ///< box, at least one pixel wide; a one-pixel footprint is the bilinear sample)
+};
+
 /// Floor of the standard deviation in kStandardize, in grey levels, so flat patches stay bounded.
 inline constexpr float kMinStddev = 4.0f;
 
-/// Crops `box` from `image`, resamples it bilinearly to width × height (pixels outside the image
-/// repeat the border) and normalises it into `out` (width × height floats, rows top-down).
-/// No allocation. Throws colorfree::Error for an empty image, an empty box or a size > 256.
+/// Crops `box` from `image`, resamples it to width × height (pixels outside the image repeat the
+/// border) and normalises it into `out` (width × height floats, rows top-down). Bilinear: no
+/// allocation; area: buffers per thread that grow to the largest image seen. Throws
+/// colorfree::Error for an empty image, an empty box or a size > 256.
 void extractPatch(const GrayView& image, const PatchBox& box, int width, int height,
-                  PatchNormalization normalization, float* out);
+                  PatchNormalization normalization, float* out,
+                  PatchResampling resampling = PatchResampling::kBilinear);
 
 /// The width × height patch `in` (rows top-down) mirrored left to right into `out` (not `in`).
 void mirrorPatch(const float* in, int width, int height, float* out);
