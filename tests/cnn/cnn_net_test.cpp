@@ -101,7 +101,7 @@ TEST(CnnNet, CfgAndWeightsRoundTrip) {
   EXPECT_FALSE(std::filesystem::exists(tempPath("rt.weights.tmp")));
 }
 
-TEST(CnnNet, TheCfgNamesTheResampling) {
+TEST(CnnNet, TheCfgNamesTheResamplingAndTheNormalization) {
   const std::string layers = "[net]\nwidth=4\nheight=4\nchannels=1\n[connected]\noutput=2\n";
   EXPECT_EQ(parseDarknetCfg(layers, "plain").resampling(), PatchResampling::kBilinear);
   Net area = parseDarknetCfg("# colorfree resampling=area\n" + layers, "area");
@@ -110,7 +110,9 @@ TEST(CnnNet, TheCfgNamesTheResampling) {
   EXPECT_EQ(parseDarknetCfg("# colorfree resampling=bilinear\n" + layers, "b").resampling(),
             PatchResampling::kBilinear);
   expectError([&] { parseDarknetCfg("# colorfree resampling=cubic\n" + layers, "cubic.cfg"); },
-              {"cubic.cfg:1", "unknown resampling 'cubic'"});
+              {"cubic.cfg:1", "unknown resampling 'cubic' (bilinear, area)"});
+  expectError([&] { parseDarknetCfg("\n# colorfree normalization=foo\n" + layers, "foo.cfg"); },
+              {"foo.cfg:2", "unknown normalization 'foo' (standardize, unit)"});
 }
 
 TEST(CnnNet, InitialisationIsSeeded) {

@@ -1,5 +1,6 @@
 #include "colorfree/perception/cnn/net.h"
 
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -230,28 +231,29 @@ Net parseDarknetCfg(const std::string& text, const std::string& origin) {
   while (std::getline(in, raw)) {
     ++line_no;
     std::string line = trim(raw);
-    if (line.rfind(kNormalizationComment, 0) == 0) {
-      const std::string value = trim(line.substr(std::strlen(kNormalizationComment)));
-      if (value == "standardize") {
-        normalization = PatchNormalization::kStandardize;
-      } else if (value == "unit") {
-        normalization = PatchNormalization::kUnitRange;
-      } else {
-        throw Error(origin + ":" + std::to_string(line_no) + ": unknown normalization '" + value +
-                    "' (standardize, unit)");
+    // "# colorfree KEY=VALUE": one of the named values, or an error naming the file and line.
+    const auto setting = [&](const char* comment, const char* key, auto& out, const auto& values) {
+      if (line.rfind(comment, 0) != 0) return false;
+      const std::string value = trim(line.substr(std::strlen(comment)));
+      std::string names;
+      for (const auto& [name, v] : values) {
+        if (value == name) {
+          out = v;
+          return true;
+        }
+        names += (names.empty() ? "" : ", ") + std::string(name);
       }
-      continue;
-    }
-    if (line.rfind(kResamplingComment, 0) == 0) {
-      const std::string value = trim(line.substr(std::strlen(kResamplingComment)));
-      if (value == "bilinear") {
-        resampling = PatchResampling::kBilinear;
-      } else if (value == "area") {
-        resampling = PatchResampling::kArea;
-      } else {
-        throw Error(origin + ":" + std::to_string(line_no) + ": unknown resampling '" + value +
-                    "' (bilinear, area)");
-      }
+      throw Error(origin + ":" + std::to_string(line_no) + ": unknown " + key + " '" + value +
+                  "' (" + names + ")");
+    };
+    if (setting(kNormalizationComment, "normalization", normalization,
+                std::array<std::pair<const char*, PatchNormalization>, 2>{
+                    {{"standardize", PatchNormalization::kStandardize},
+                     {"unit", PatchNormalization::kUnitRange}}}) ||
+        setting(
+            kResamplingComment, "resampling", resampling,
+            std::array<std::pair<const char*, PatchResampling>, 2>{
+                {{"bilinear", PatchResampling::kBilinear}, {"area", PatchResampling::kArea}}})) {
       continue;
     }
     if (line.empty() || line[0] == '#' || line[0] == ';') continue;
