@@ -184,8 +184,7 @@ void RobotDetector::shiftWidePieces(const GrayView& image, std::vector<RobotProp
   }
   std::vector<float> inputs(moved.size() * n), moved_robot;
   for (std::size_t j = 0; j < moved.size(); ++j) {
-    cnn::extractPatch(image, robotPatchBox(moved[j]), in.width, in.height,
-                      net_.net().normalization(), inputs.data() + j * n, net_.net().resampling());
+    net_.extract(image, robotPatchBox(moved[j]), inputs.data() + j * n);
   }
   score(image, moved.data(), inputs.data(), moved.size(), moved_robot);
   for (std::size_t w = 0; w < which.size(); ++w) {
@@ -217,9 +216,7 @@ void RobotDetector::moveFeet(const GrayView& image, const CameraModel& camera,
       if (step == 0 && same_input) {
         std::copy_n(robot_net_patches.data() + moving[k] * n, n, inputs.data() + k * n);
       } else {
-        cnn::extractPatch(image, robotPatchBox(boxes[moving[k]]), in.width, in.height,
-                          feet_net_->net().normalization(), inputs.data() + k * n,
-                          feet_net_->net().resampling());
+        feet_net_->extract(image, robotPatchBox(boxes[moving[k]]), inputs.data() + k * n);
       }
     }
     feet_net_->run(inputs.data(), static_cast<int>(moving.size()), probs.data());
@@ -400,9 +397,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     if (seen.size() == from) return;
     patches.resize(seen.size() * patch_size);
     for (std::size_t i = from; i < seen.size(); ++i) {
-      cnn::extractPatch(image, robotPatchBox(seen[i]), in.width, in.height,
-                        net_.net().normalization(), patches.data() + i * patch_size,
-                        net_.net().resampling());
+      net_.extract(image, robotPatchBox(seen[i]), patches.data() + i * patch_size);
     }
     score(image, seen.data() + from, patches.data() + from * patch_size, seen.size() - from, robot);
   };

@@ -734,8 +734,7 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
     const std::size_t count = accepted.size();
     std::vector<float> inputs(count * n);
     for (std::size_t i = 0; i < count; ++i) {
-      cnn::extractPatch(image, accepted[i], in.width, in.height, ori_.net().normalization(),
-                        inputs.data() + i * n, ori_.net().resampling());
+      ori_.extract(image, accepted[i], inputs.data() + i * n);
     }
     sides.resize(count * 4);
     ori_.run(inputs.data(), static_cast<int>(count), sides.data());

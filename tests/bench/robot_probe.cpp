@@ -178,41 +178,40 @@ int probe(int argc, char** argv) {
         if (!r.should_detect) continue;
         if (shift_net) {
           const auto& fc = f.perception_camera;
-          std::vector<cnn::PatchBox> pbs;
           const double shifts[] = {-0.2, -0.15, -0.1, -0.05, 0, 0.05, 0.1, 0.15, 0.2};
+          // The proposer's box for feet at `g` of a robot `h` px tall.
+          const auto proposerBox = [&](const Eigen::Vector2d& g, double h) {
+            const double w =
+                rpp.box_width_factor * h * config.field.robot_width_m / config.field.robot_height_m;
+            const double y1 = g.y() + rpp.box_below_feet_fraction * h;
+            const double y0 = y1 - rpp.box_height_factor * h;
+            return cnn::PatchBox{float(g.x() - w / 2), float(y0), float(w), float(y1 - y0)};
+          };
+          const auto print = [&](const char* what, double size_px,
+                                 const std::vector<cnn::PatchBox>& pbs) {
+            std::vector<float> pr;
+            shift_net->classify(frame.image, pbs, pr);
+            std::printf("     %s=%.0f", what, size_px);
+            for (std::size_t k = 0; k < pbs.size(); ++k) std::printf(" %.2f", pr[2 * k + 1]);
+            std::printf("\n");
+          };
           const auto h0 = fc.robotHeightPx(r.ground_px, config.field.robot_height_m);
           if (h0) {
+            std::vector<cnn::PatchBox> pbs;
             for (double s : shifts) {
               const Eigen::Vector2d g(r.ground_px.x(), r.ground_px.y() + s * *h0);
               const auto h = fc.robotHeightPx(g, config.field.robot_height_m);
-              if (!h) {
-                pbs.push_back({0, 0, 1, 1});
-                continue;
-              }
-              const double w = rpp.box_width_factor * *h * config.field.robot_width_m /
-                               config.field.robot_height_m;
-              const double y1 = g.y() + rpp.box_below_feet_fraction * *h;
-              const double y0 = y1 - rpp.box_height_factor * *h;
-              pbs.push_back({float(g.x() - w / 2), float(y0), float(w), float(y1 - y0)});
+              pbs.push_back(h ? proposerBox(g, *h) : cnn::PatchBox{0, 0, 1, 1});
             }
-            std::vector<float> pr;
-            shift_net->classify(frame.image, pbs, pr);
-            std::printf("     SHIFT h=%.0f", *h0);
-            for (std::size_t k = 0; k < pbs.size(); ++k) std::printf(" %.2f", pr[2 * k + 1]);
-            std::printf("\n");
+            print("SHIFT h", *h0, pbs);
+            const cnn::PatchBox centre = proposerBox(r.ground_px, *h0);
             pbs.clear();
-            const double w0 = rpp.box_width_factor * *h0 * config.field.robot_width_m /
-                              config.field.robot_height_m;
             for (double s : shifts) {
-              const Eigen::Vector2d g(r.ground_px.x() + s * w0, r.ground_px.y());
-              const double y1 = g.y() + rpp.box_below_feet_fraction * *h0;
-              const double y0 = y1 - rpp.box_height_factor * *h0;
-              pbs.push_back({float(g.x() - w0 / 2), float(y0), float(w0), float(y1 - y0)});
+              cnn::PatchBox moved = centre;
+              moved.x_px += static_cast<float>(s * centre.width_px);
+              pbs.push_back(moved);
             }
-            shift_net->classify(frame.image, pbs, pr);
-            std::printf("     XSHIFT w=%.0f", w0);
-            for (std::size_t k = 0; k < pbs.size(); ++k) std::printf(" %.2f", pr[2 * k + 1]);
-            std::printf("\n");
+            print("XSHIFT w", centre.width_px, pbs);
           }
         }
         ++truths;

@@ -73,6 +73,12 @@ void Classifier::run(const float* inputs, int count, float* probabilities) const
   }
 }
 
+void Classifier::extract(const GrayView& image, const PatchBox& box, float* out) const {
+  const Net& net = impl_->net;
+  extractPatch(image, box, net.input().width, net.input().height, net.normalization(), out,
+               net.resampling());
+}
+
 void Classifier::classify(const GrayView& image, const std::vector<PatchBox>& boxes,
                           std::vector<float>& probabilities) const {
   const Net& net = impl_->net;
@@ -85,8 +91,7 @@ void Classifier::classify(const GrayView& image, const std::vector<PatchBox>& bo
   for (std::size_t start = 0; start < boxes.size(); start += kLanes) {
     const int m = static_cast<int>(std::min<std::size_t>(kLanes, boxes.size() - start));
     for (int b = 0; b < m; ++b) {
-      extractPatch(image, boxes[start + b], net.input().width, net.input().height,
-                   net.normalization(), buffer + static_cast<std::size_t>(b) * n, net.resampling());
+      extract(image, boxes[start + b], buffer + static_cast<std::size_t>(b) * n);
     }
     run(buffer, m, probabilities.data() + start * k);
   }

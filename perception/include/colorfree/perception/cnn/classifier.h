@@ -33,8 +33,12 @@ class Classifier {
   /// Batches of 16 use the vector lanes fully; single patches take a dedicated path.
   void run(const float* inputs, int count, float* probabilities) const;
 
-  /// Extracts the boxes from `image` (see extractPatch, with the net's normalisation) and
-  /// classifies them; `probabilities` gets boxes.size() × classes values.
+  /// The net's input for `box` of `image` into `out` (input().size() floats): extractPatch with
+  /// the net's size, normalisation and resampling.
+  void extract(const GrayView& image, const PatchBox& box, float* out) const;
+
+  /// Extracts the boxes from `image` (see extract) and classifies them; `probabilities` gets
+  /// boxes.size() × classes values.
   void classify(const GrayView& image, const std::vector<PatchBox>& boxes,
                 std::vector<float>& probabilities) const;
 
