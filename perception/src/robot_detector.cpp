@@ -450,7 +450,9 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     // A box behind a robot takes part from min_behind_robot_confidence, but not when it overlaps
     // an accepted box it stands behind as two robots' boxes overlap (it is that robot's knee or
     // hand, which RobotNet may score higher than the robot), nor with another accepted box inside
-    // it (its patch holds the nearer robot's body and that robot, which would become its part).
+    // it (its patch holds the nearer robot's body and that robot, which would become its part),
+    // unless that box's feet lie in its own lower part: that is its knee or hand, not the nearer
+    // robot (a free-standing knee box must not shut out its robot held back behind another).
     if (robot[i] < params_.min_behind_robot_confidence) continue;
     bool excluded = false;
     for (int k : held_back[i - proposals.size()].nearer) {
@@ -458,7 +460,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     }
     for (std::size_t k = 0; k < seen.size() && !excluded; ++k) {
       excluded = on_own_bar[k] &&
-                 boxInsideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction;
+                 boxInsideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction &&
+                 !feetInLowerPart(seen[k].feet_px, seen[i], params_.behind_lower_part_fraction);
     }
     if (!excluded) accepted[i] = robot[i];
   }

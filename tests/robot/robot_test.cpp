@@ -1256,6 +1256,51 @@ TEST(RobotDetector, AnUnsureBoxIsScoredByTheMeanOfItsLookAndItsMirroredLook) {
   }
 }
 
+TEST(RobotDetector, AKneeBoxInsideARobotHeldBackBehindAnotherDoesNotShutItOut) {
+  // A robot held back behind a nearer one (feet in its lower part, overlapping it little), and a
+  // free proposal at that robot's own knee, inside its box: RobotNet accepts all three. The knee
+  // box is the held-back robot's part, not the nearer robot, so the robot stays and the knee box
+  // goes as its part (README robot30; before, the knee box shut the robot out and stayed).
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(100, 100), cv::Point(299, 419), cv::Scalar(200), cv::FILLED);
+  cv::rectangle(wrap(img), cv::Point(250, 230), cv::Point(329, 339), cv::Scalar(230), cv::FILLED);
+  // (The knee's box a little less bright than the robot's: RobotNet a little less sure of it.)
+  cv::rectangle(wrap(img), cv::Point(262, 240), cv::Point(317, 309), cv::Scalar(160), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const RobotProposal front = proposal(pixelBox(100, 100, 300, 420));
+  const RobotProposal behind = proposal(pixelBox(250, 230, 330, 340));
+  const RobotProposal knee = proposal(pixelBox(262, 240, 318, 310));
+  RobotDetectorParams params;
+  params.shin_gap_height_fraction = 0;
+  ASSERT_TRUE(feetInLowerPart(behind.feet_px, front, params.behind_lower_part_fraction));
+  ASSERT_LT(boxIou(behind.box, front.box), params.max_overlap_iou);
+  ASSERT_TRUE(feetInLowerPart(knee.feet_px, behind, params.behind_lower_part_fraction));
+  ASSERT_GE(boxInsideFraction(knee.box, behind.box), params.max_inside_fraction);
+  std::vector<RobotProposal> classified;
+  std::vector<float> confidences;
+  const auto robots = brightnessDetector(params).run(img.view(), cam, {front, knee}, {{behind, {0}}},
+                                                     &classified, &confidences);
+  ASSERT_EQ(confidences.size(), 3u);
+  for (const float c : confidences) EXPECT_GT(c, params.min_behind_robot_confidence);
+  EXPECT_GT(confidences[2], confidences[1]);  // behind, knee
+  ASSERT_EQ(robots.size(), 2u);
+  std::vector<double> x0s = {robots[0].box.x0, robots[1].box.x0};
+  std::sort(x0s.begin(), x0s.end());
+  EXPECT_EQ(x0s, (std::vector<double>{front.box.x0, behind.box.x0}));
+
+  // A box inside it whose feet stand above its lower part (the nearer robot's body seen through
+  // its patch, as in ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOtherBox) still does.
+  const RobotProposal body = proposal(pixelBox(262, 232, 318, 290));
+  ASSERT_FALSE(feetInLowerPart(body.feet_px, behind, params.behind_lower_part_fraction));
+  ASSERT_GE(boxInsideFraction(body.box, behind.box), params.max_inside_fraction);
+  const auto shut = brightnessDetector(params).run(img.view(), cam, {front, body}, {{behind, {0}}},
+                                                   &classified, &confidences);
+  ASSERT_EQ(shut.size(), 2u);
+  x0s = {shut[0].box.x0, shut[1].box.x0};
+  std::sort(x0s.begin(), x0s.end());
+  EXPECT_EQ(x0s, (std::vector<double>{front.box.x0, body.box.x0}));
+}
+
 TEST(RobotDetector, ABoxBehindARobotOverlappingItLikeARobotIsItsKneeOrHand) {
   // The near robot's box reaches past the lit body onto the carpet; the held-back box at its knee
   // lies wholly on the body, and RobotNet is surer of it than of the robot.

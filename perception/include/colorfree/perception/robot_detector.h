@@ -52,7 +52,9 @@ struct RobotDetectorParams {
   /// own_body_height_fraction) stays only from min_behind_robot_confidence too, wherever the
   /// proposer put it: it is that robot's knee or hand, or a robot behind it. Above that part, a
   /// box of at least min_behind_robot_confidence max_inside_fraction inside a larger accepted one
-  /// is a robot behind it, not its part (keptRobotBoxes). 0: neither test.
+  /// is a robot behind it, not its part (keptRobotBoxes); and an accepted box inside a held-back
+  /// candidate's box with its feet in that part of it is its knee or hand, which does not shut
+  /// it out as a nearer robot's body would. 0: none of these tests.
   double behind_lower_part_fraction = 0.4;
   /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
   /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
