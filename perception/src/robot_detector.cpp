@@ -459,9 +459,10 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       excluded |= on_own_bar[k] && boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou;
     }
     for (std::size_t k = 0; k < seen.size() && !excluded; ++k) {
-      excluded = on_own_bar[k] &&
-                 boxInsideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction &&
-                 !feetInLowerPart(seen[k].feet_px, seen[i], params_.behind_lower_part_fraction);
+      excluded =
+          on_own_bar[k] &&
+          boxInsideFraction(proposal_boxes[k], proposal_boxes[i]) >= params_.max_inside_fraction &&
+          !feetInLowerPart(seen[k].feet_px, seen[i], params_.behind_lower_part_fraction);
     }
     if (!excluded) accepted[i] = robot[i];
   }

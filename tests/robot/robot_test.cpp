@@ -1278,8 +1278,8 @@ TEST(RobotDetector, AKneeBoxInsideARobotHeldBackBehindAnotherDoesNotShutItOut) {
   ASSERT_GE(boxInsideFraction(knee.box, behind.box), params.max_inside_fraction);
   std::vector<RobotProposal> classified;
   std::vector<float> confidences;
-  const auto robots = brightnessDetector(params).run(img.view(), cam, {front, knee}, {{behind, {0}}},
-                                                     &classified, &confidences);
+  const auto robots = brightnessDetector(params).run(img.view(), cam, {front, knee},
+                                                     {{behind, {0}}}, &classified, &confidences);
   ASSERT_EQ(confidences.size(), 3u);
   for (const float c : confidences) EXPECT_GT(c, params.min_behind_robot_confidence);
   EXPECT_GT(confidences[2], confidences[1]);  // behind, knee
