@@ -354,6 +354,28 @@ std::string unmetText(const json& sc) {
   return unmet;
 }
 
+// The detection set's detection rate per bin of the demanded objects' visible fraction, ball and
+// robot side by side: [{from_fraction, to_fraction, robot: {truths, detection_rate}, ball: ...}].
+json byVisibleFraction(const json& d) {
+  std::map<double, json> rows;
+  for (const char* obj : {"robot", "ball"}) {
+    for (const auto& b : at(d, std::string("by_visibility.") + obj)) {
+      json& row = rows[b.at("from_fraction").get<double>()];
+      row["from_fraction"] = b.at("from_fraction");
+      row["to_fraction"] = b.at("to_fraction");
+      row[obj] = {{"truths", b.at("truths")}, {"detection_rate", b.at("detection_rate")}};
+    }
+  }
+  json out = json::array();
+  for (auto& [from, row] : rows) {
+    for (const char* obj : {"robot", "ball"}) {
+      if (!row.contains(obj)) row[obj] = {{"truths", 0}, {"detection_rate", nullptr}};
+    }
+    out.push_back(row);
+  }
+  return out;
+}
+
 json benchSummary(const BenchPlan& plan, const json& experiments) {
   json s;
   std::string id;
@@ -366,6 +388,7 @@ json benchSummary(const BenchPlan& plan, const json& experiments) {
     }
     t["paper"] = {{"robot", {{"proposals_per_frame", 3.05}, {"proposal_recall", 0.972}, {"detection_rate", 0.949}}},
                   {"ball", {{"proposals_per_frame", 10.3}, {"proposal_recall", 0.993}, {"detection_rate", 0.971}}}};
+    t["by_visible_fraction"] = byVisibleFraction(*d);
     s["table2"] = t;
     s["field_features"] = {{"experiment", id},
                            {"pose_error_mm", at(*d, "field_features.pose_error_mm")},
@@ -435,6 +458,19 @@ void printBenchTables(const json& results) {
       std::printf("  %-28s %9s %9s %9s %9s\n", label.c_str(), fmt(t.at("robot").at(key), prec).c_str(),
                   paperFmt(at(t, "paper.robot." + key), prec == 2 ? 2 : 3).c_str(), fmt(t.at("ball").at(key), prec).c_str(),
                   paperFmt(at(t, "paper.ball." + key), prec == 2 ? 1 : 3).c_str());
+    }
+    if (t.contains("by_visible_fraction") && !t.at("by_visible_fraction").empty()) {
+      // (No demanded object in a bin: "-", not "absent", which means no such detector.)
+      const auto rate = [](const json& o) {
+        return o.at("truths").get<long>() > 0 ? fmt(o.at("detection_rate")) : std::string("-");
+      };
+      std::printf("  %-28s %9s %9s %9s %9s\n", "per visible fraction", "robot", "n", "ball", "n");
+      for (const auto& r : t.at("by_visible_fraction")) {
+        const std::string bin = fmt(r.at("from_fraction"), 1) + "-" + fmt(r.at("to_fraction"), 1);
+        std::printf("  %-28s %9s %9ld %9s %9ld\n", bin.c_str(), rate(r.at("robot")).c_str(),
+                    r.at("robot").at("truths").get<long>(), rate(r.at("ball")).c_str(),
+                    r.at("ball").at("truths").get<long>());
+      }
     }
   }
   for (const char* which : {"orientation_static", "orientation_dynamic"}) {
@@ -610,6 +646,23 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
         << (at(t, "paper.ball." + key).is_number() ? fmt(at(t, "paper.ball." + key)) : "&ndash;") << "</td></tr>";
     }
     h << "</table>";
+    if (t.contains("by_visible_fraction") && !t.at("by_visible_fraction").empty()) {
+      const auto rate = [&](const json& o) {
+        return o.at("truths").get<long>() > 0 ? cell(o.at("detection_rate"))
+                                              : std::string("&ndash;");
+      };
+      h << "<h3>Detection rate per visible fraction (detection set; objects partly hidden by "
+           "others or by the image border)</h3><table><tr><th>visible fraction</th>"
+           "<th>robot detection</th><th>robot-frames</th><th>ball detection</th>"
+           "<th>ball-frames</th></tr>";
+      for (const auto& r : t.at("by_visible_fraction")) {
+        h << "<tr><td>" << fmt(r.at("from_fraction"), 1) << "&ndash;" << fmt(r.at("to_fraction"), 1)
+          << "</td><td>" << rate(r.at("robot")) << "</td><td>" << r.at("robot").at("truths")
+          << "</td><td>" << rate(r.at("ball")) << "</td><td>" << r.at("ball").at("truths")
+          << "</td></tr>";
+      }
+      h << "</table>";
+    }
   }
   h << "<h2>Orientation (paper's Figs. 5 and 6)</h2><table><tr><th>experiment</th><th>tolerance deg</th>"
        "<th>robot-frames</th><th>perceived, raw</th><th>perceived, filtered</th><th class=paper>paper (filtered)</th></tr>";

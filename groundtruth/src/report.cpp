@@ -399,18 +399,24 @@ std::string renderReportHtml(const json& r, const std::vector<GalleryItem>& gall
     h << lineChart("Detection rate against " + key, key, {ball, robot, lines, crossings});
     any_chart = true;
   }
-  Series bdist{"ball", "#1f6fd1", {}}, rdist{"robot", "#d6453d", {}};
-  for (const auto& b : at(r, "by_distance.ball"))
-    bdist.points.push_back(
-        {(b["from_m"].get<double>() + b["to_m"].get<double>()) / 2, b["detection_rate"]});
-  for (const auto& b : at(r, "by_distance.robot"))
-    rdist.points.push_back(
-        {(b["from_m"].get<double>() + b["to_m"].get<double>()) / 2, b["detection_rate"]});
-  if (!bdist.points.empty() || !rdist.points.empty()) {
-    h << lineChart("Detection rate against distance (all frames)",
-                   "distance from the observer, m (bin centre)", {bdist, rdist});
+  // The detection rate per bin of the scorer's by_distance / by_visibility tables.
+  const auto binChart = [&](const std::string& table, const std::string& unit,
+                            const std::string& title, const std::string& axis) {
+    Series ball{"ball", "#1f6fd1", {}}, robot{"robot", "#d6453d", {}};
+    for (Series* s : {&ball, &robot}) {
+      for (const auto& b : at(r, table + "." + s->name)) {
+        s->points.push_back({(b["from_" + unit].get<double>() + b["to_" + unit].get<double>()) / 2,
+                             b["detection_rate"]});
+      }
+    }
+    if (ball.points.empty() && robot.points.empty()) return;
+    h << lineChart(title, axis, {ball, robot});
     any_chart = true;
-  }
+  };
+  binChart("by_distance", "m", "Detection rate against distance (all frames)",
+           "distance from the observer, m (bin centre)");
+  binChart("by_visibility", "fraction", "Detection rate against the visible fraction (all frames)",
+           "visible fraction of the demanded object (bin centre)");
   if (!any_chart) h << "<p class=na>No sweep and no detector output to chart.</p>";
 
   if (cases.size() > 1) {

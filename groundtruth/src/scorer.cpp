@@ -53,6 +53,7 @@ struct Tally {
   long frames = 0;
   ObjectTally ball, robot;
   std::map<int, BinTally> ball_by_distance, robot_by_distance;
+  std::map<int, BinTally> ball_by_visibility, robot_by_visibility;
   long orientation_frames = 0;
   ClassCounts orientation_raw{}, orientation_filtered{};
   std::map<int, std::pair<ClassCounts, ClassCounts>> orientation_by_heading;
@@ -111,11 +112,14 @@ json classesJson(const ClassCounts& c, bool present) {
   return j;
 }
 
-json distanceJson(const std::map<int, BinTally>& bins, double bin_m) {
+// Bins `width` wide as {from_UNIT, to_UNIT, truths, detection_rate} (unit: "m", "fraction").
+json binsJson(const std::map<int, BinTally>& bins, double width, const std::string& unit) {
+  // (Rounded to 1e-12: bin 6 of 0.1 is 0.6, not 0.6000000000000001.)
+  const auto edge = [&](int i) { return std::round(i * width * 1e12) / 1e12; };
   json a = json::array();
   for (const auto& [k, b] : bins) {
-    a.push_back({{"from_m", k * bin_m},
-                 {"to_m", (k + 1) * bin_m},
+    a.push_back({{"from_" + unit, edge(k)},
+                 {"to_" + unit, edge(k + 1)},
                  {"truths", b.truths},
                  {"detection_rate", rate(b.detected, b.truths)}});
   }
@@ -184,8 +188,11 @@ json tallyJson(const Tally& t, const ScoringParams& p) {
                  {"ambiguous", c.ambiguous}};
   }
   j["cnn"] = cnn;
-  j["by_distance"] = {{"ball", distanceJson(t.ball_by_distance, p.distance_bin_m)},
-                      {"robot", distanceJson(t.robot_by_distance, p.distance_bin_m)}};
+  j["by_distance"] = {{"ball", binsJson(t.ball_by_distance, p.distance_bin_m, "m")},
+                      {"robot", binsJson(t.robot_by_distance, p.distance_bin_m, "m")}};
+  j["by_visibility"] = {
+      {"ball", binsJson(t.ball_by_visibility, p.visibility_bin_fraction, "fraction")},
+      {"robot", binsJson(t.robot_by_visibility, p.visibility_bin_fraction, "fraction")}};
   return j;
 }
 
@@ -214,7 +221,8 @@ json paramsJson(const ScoringParams& p) {
           {"feature_visibility_window_px", p.feature_visibility_window_px},
           {"pose_guess_offset_m", p.pose_guess_offset_m},
           {"pose_guess_offset_deg", p.pose_guess_offset_deg},
-          {"distance_bin_m", p.distance_bin_m}};
+          {"distance_bin_m", p.distance_bin_m},
+          {"visibility_bin_fraction", p.visibility_bin_fraction}};
 }
 
 bool segmentNear(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const LineInImage& truth,
@@ -339,6 +347,13 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
     return toField(*g);
   };
   auto distanceBin = [&](double d) { return static_cast<int>(std::floor(d / p.distance_bin_m)); };
+  // (A whole object, visible fraction 1, falls in the last bin below 1, not in one of its own.)
+  const int last_visibility_bin =
+      std::max(0, static_cast<int>(std::ceil(1 / p.visibility_bin_fraction - 1e-9)) - 1);
+  auto visibilityBin = [&](double f) {
+    return std::clamp(static_cast<int>(std::floor(f / p.visibility_bin_fraction)), 0,
+                      last_visibility_bin);
+  };
   std::vector<Tally*> tallies = {&state_->total, &case_tally};
   const std::string where =
       state_->cases.back().first.name + " frame " + std::to_string(truth.frame_index);
@@ -414,11 +429,14 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       for (Tally* t : tallies) {
         ++t->ball.truths;
         auto& bin = t->ball_by_distance[distanceBin(b.distance_m)];
+        auto& vbin = t->ball_by_visibility[visibilityBin(b.visible_fraction)];
         ++bin.truths;
+        ++vbin.truths;
         if (pi >= 0) {
           ++t->ball.detected;
           ++t->ball.true_positives;
           ++bin.detected;
+          ++vbin.detected;
         }
         if (err) {
           ++t->ball.position_errors;
@@ -551,11 +569,14 @@ void Scorer::addFrame(const FrameTruth& truth, const FramePercepts& pc, const Ca
       for (Tally* t : tallies) {
         ++t->robot.truths;
         auto& dbin = t->robot_by_distance[distanceBin(r.distance_m)];
+        auto& vbin = t->robot_by_visibility[visibilityBin(r.visible_fraction)];
         ++dbin.truths;
+        ++vbin.truths;
         if (pi >= 0) {
           ++t->robot.detected;
           ++t->robot.true_positives;
           ++dbin.detected;
+          ++vbin.detected;
         }
         if (err) {
           ++t->robot.position_errors;
@@ -894,6 +915,8 @@ json tallyState(const Tally& t) {
   j["robot"] = objectState(t.robot);
   j["ball_by_distance"] = binsState(t.ball_by_distance);
   j["robot_by_distance"] = binsState(t.robot_by_distance);
+  j["ball_by_visibility"] = binsState(t.ball_by_visibility);
+  j["robot_by_visibility"] = binsState(t.robot_by_visibility);
   j["orientation_frames"] = t.orientation_frames;
   j["orientation_raw"] = t.orientation_raw;
   j["orientation_filtered"] = t.orientation_filtered;
@@ -922,6 +945,8 @@ Tally tallyFromState(const json& j) {
   objectFromState(j.at("robot"), t.robot);
   t.ball_by_distance = binsFromState(j.at("ball_by_distance"));
   t.robot_by_distance = binsFromState(j.at("robot_by_distance"));
+  t.ball_by_visibility = binsFromState(j.at("ball_by_visibility"));
+  t.robot_by_visibility = binsFromState(j.at("robot_by_visibility"));
   t.orientation_frames = j.at("orientation_frames").get<long>();
   t.orientation_raw = j.at("orientation_raw").get<ClassCounts>();
   t.orientation_filtered = j.at("orientation_filtered").get<ClassCounts>();
@@ -981,14 +1006,16 @@ void addTally(Tally& a, const Tally& b) {
   a.frames += b.frames;
   addObject(a.ball, b.ball);
   addObject(a.robot, b.robot);
-  for (const auto& [k, v] : b.ball_by_distance) {
-    a.ball_by_distance[k].truths += v.truths;
-    a.ball_by_distance[k].detected += v.detected;
-  }
-  for (const auto& [k, v] : b.robot_by_distance) {
-    a.robot_by_distance[k].truths += v.truths;
-    a.robot_by_distance[k].detected += v.detected;
-  }
+  const auto addBins = [](std::map<int, BinTally>& to, const std::map<int, BinTally>& from) {
+    for (const auto& [k, v] : from) {
+      to[k].truths += v.truths;
+      to[k].detected += v.detected;
+    }
+  };
+  addBins(a.ball_by_distance, b.ball_by_distance);
+  addBins(a.robot_by_distance, b.robot_by_distance);
+  addBins(a.ball_by_visibility, b.ball_by_visibility);
+  addBins(a.robot_by_visibility, b.robot_by_visibility);
   a.orientation_frames += b.orientation_frames;
   addClasses(a.orientation_raw, b.orientation_raw);
   addClasses(a.orientation_filtered, b.orientation_filtered);

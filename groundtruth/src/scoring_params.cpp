@@ -35,6 +35,7 @@ ScoringParams ScoringParams::load(const std::string& path) {
   p.pose_guess_offset_m = f.getInRange("pose_guess_offset_m", 0, 5);
   p.pose_guess_offset_deg = f.getInRange("pose_guess_offset_deg", -90, 90);
   p.distance_bin_m = f.getInRange("distance_bin_m", 0.05, 100);
+  p.visibility_bin_fraction = f.getInRange("visibility_bin_fraction", 0.01, 1);
   p.gallery_max_crops = static_cast<int>(f.getInRange("gallery_max_crops", 0, 1000));
   p.gallery_worst_frames = static_cast<int>(f.getInRange("gallery_worst_frames", 0, 1000));
   f.finish();

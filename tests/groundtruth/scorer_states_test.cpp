@@ -128,6 +128,8 @@ TEST(ScorerStates, RoundTripGivesTheSameResults) {
   EXPECT_EQ(got["cnn"]["BallNet"]["samples"], 6);
   EXPECT_TRUE(got["timing_ms"]["high_contrast"]["max"].is_number());
   EXPECT_FALSE(got["by_distance"]["ball"].empty());
+  EXPECT_FALSE(got["by_visibility"]["ball"].empty());
+  EXPECT_FALSE(got["by_visibility"]["robot"].empty());
 }
 
 TEST(ScorerStates, SplitByCaseMergesExactly) {

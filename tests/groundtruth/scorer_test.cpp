@@ -242,6 +242,40 @@ TEST(Scorer, RobotAndOrientationMetricsOnHandMadeFrames) {
   EXPECT_DOUBLE_EQ(per[2]["raw"]["not_perceived"], 1);
 }
 
+TEST(Scorer, DetectionRateAgainstTheVisibleFraction) {
+  ScoringParams params;
+  params.visibility_bin_fraction = 0.25;
+  Scorer s(params, FieldDimensions{});
+  // Robots 0.55 (missed), 0.6 (found), 0.8 (missed) and 1.0 (found) visible; one not demanded.
+  FrameTruth t;
+  t.robots = {robotTruth(0, 0, 0), robotTruth(1, 0, 0), robotTruth(2, 0, 0), robotTruth(3, 0, 0),
+              robotTruth(4, 0, 0)};
+  t.robots[0].visible_fraction = 0.55;
+  t.robots[1].visible_fraction = 0.6;
+  t.robots[2].visible_fraction = 0.8;
+  t.robots[3].visible_fraction = 1.0;
+  t.robots[4].visible_fraction = 0.2;
+  t.robots[4].should_detect = false;
+  FramePercepts p;
+  p.robots = {robotAt(t.robots[1].box, std::nullopt, std::nullopt),
+              robotAt(t.robots[3].box, std::nullopt, std::nullopt)};
+  s.addFrame(t, p, nullptr);
+  const json r = s.results({});
+  // Bins [0.5, 0.75) and [0.75, 1]: a whole robot counts in the last bin, not in one of its own.
+  const json& bins = r["by_visibility"]["robot"];
+  ASSERT_EQ(bins.size(), 2u) << bins;
+  EXPECT_DOUBLE_EQ(bins[0]["from_fraction"], 0.5);
+  EXPECT_DOUBLE_EQ(bins[0]["to_fraction"], 0.75);
+  EXPECT_EQ(bins[0]["truths"], 2);
+  EXPECT_DOUBLE_EQ(bins[0]["detection_rate"], 0.5);
+  EXPECT_DOUBLE_EQ(bins[1]["from_fraction"], 0.75);
+  EXPECT_DOUBLE_EQ(bins[1]["to_fraction"], 1.0);
+  EXPECT_EQ(bins[1]["truths"], 2);
+  EXPECT_DOUBLE_EQ(bins[1]["detection_rate"], 0.5);
+  EXPECT_TRUE(r["by_visibility"]["ball"].empty());
+  EXPECT_DOUBLE_EQ(r["scoring"]["visibility_bin_fraction"], 0.25);
+}
+
 TEST(Scorer, HeadingBinsWrapAt360) {
   ScoringParams params;
   params.orientation_heading_bin_deg = 22.5;

@@ -40,6 +40,7 @@ struct ScoringParams {
   double pose_guess_offset_deg = 5.0;
   // Report.
   double distance_bin_m = 0.5;
+  double visibility_bin_fraction = 0.1;  ///< detection rate against the visible fraction
   int gallery_max_crops = 24;
   int gallery_worst_frames = 6;
 
