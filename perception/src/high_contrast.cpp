@@ -20,6 +20,8 @@ HighContrastParams HighContrastParams::load(const std::string& path) {
   p.min_contrast = f.getInRange("min_contrast", 0, 128);
   p.light_contrast_fraction = f.getInRange("light_contrast_fraction", 0, 1);
   p.light_min_contrast = f.getInRange("light_min_contrast", 0, 128);
+  p.sparse_max_seed_fraction = f.getInRange("sparse_max_seed_fraction", 0, 1);
+  p.sparse_light_contrast_fraction = f.getInRange("sparse_light_contrast_fraction", 0, 1);
   p.row_step_px = static_cast<int>(f.getInRange("row_step_px", 1, 8));
   p.dilation_windows = static_cast<int>(f.getInRange("dilation_windows", 0, 8));
   f.finish();
@@ -95,13 +97,26 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
   out.mask.assign(n, 0);
   out.contrast.assign(n, 0.f);
   const int used_width = out.columns * s;
-  double min_contrast = params_.min_contrast;
-  if (params_.light_contrast_fraction > 0) {
-    const double relative = params_.light_contrast_fraction *
-                            (light_gray ? *light_gray : frameLightGray(image, ignore));
-    min_contrast = std::min(min_contrast, std::max(params_.light_min_contrast, relative));
-  }
-  const double min_var = min_contrast * min_contrast;
+  // The bar for this frame's light, and the lower bar of a sparse frame (see the parameters).
+  const bool sparse_test = params_.sparse_max_seed_fraction > 0;
+  const double light = params_.light_contrast_fraction > 0 || sparse_test
+                           ? (light_gray ? *light_gray : frameLightGray(image, ignore))
+                           : 0;
+  const auto bar = [&](double fraction) {
+    return fraction > 0 ? std::min(params_.min_contrast,
+                                   std::max(params_.light_min_contrast, fraction * light))
+                        : params_.min_contrast;
+  };
+  const double min_contrast = bar(params_.light_contrast_fraction);
+  const double sparse_contrast =
+      sparse_test ? std::min(min_contrast, bar(params_.sparse_light_contrast_fraction))
+                  : min_contrast;
+  // (Windows are looked at down to the lower bar; seeds are chosen when all are known.)
+  const double min_var = sparse_contrast * sparse_contrast;
+  const double frame_min_var = min_contrast * min_contrast;
+  int looked_count = 0;
+  std::vector<std::uint8_t> under_frame_bar;  // windows only the lower bar's pre-test let through
+  if (sparse_contrast < min_contrast) under_frame_bar.assign(n, 0);
   const int step = params_.row_step_px;
   const double count = static_cast<double>(s) * ((s + step - 1) / step);
 
@@ -130,6 +145,7 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
     }
     for (int c = 0; c < out.columns; ++c) {
       if (!looked[c]) continue;
+      ++looked_count;
       std::uint32_t sum = 0, sq = 0;
       for (int x = c * s; x < (c + 1) * s; ++x) {
         sum += col_sum[x];
@@ -139,6 +155,7 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
       const double var = sq / count - mean * mean;
       // Otsu's between-class variance never exceeds the window's variance.
       if (var < min_var) continue;
+      if (var < frame_min_var) under_frame_bar[static_cast<std::size_t>(r) * out.columns + c] = 1;
       // Otsu over 32 bins of 8 gray levels; each bin keeps the sum of its values, so the class
       // means (and the contrast) are exact for thresholds between bins. A bin's count (high 32
       // bits) and value sum (low 32 bits, at most 64 * 64 * 255) share one counter, so a pixel
@@ -163,6 +180,17 @@ ContrastRegions HighContrastDetector::run(const GrayView& image, const IgnoreMas
       const std::size_t i = static_cast<std::size_t>(r) * out.columns + c;
       out.contrast[i] = static_cast<float>(o.between_std);
       if (o.between_std >= min_contrast) out.seeds[i] = 1;
+    }
+  }
+  if (sparse_contrast < min_contrast) {
+    const auto seeded = std::count(out.seeds.begin(), out.seeds.end(), std::uint8_t{1});
+    if (seeded < params_.sparse_max_seed_fraction * looked_count) {
+      for (std::size_t i = 0; i < n; ++i) out.seeds[i] = out.contrast[i] >= sparse_contrast;
+    } else {
+      // (As without the lower bar: 0 for a window the frame's own pre-test skips.)
+      for (std::size_t i = 0; i < n; ++i) {
+        if (under_frame_bar[i]) out.contrast[i] = 0;
+      }
     }
   }
 

@@ -309,7 +309,11 @@ std::vector<BallProposal> proposeOnly(const GrayImage& image, const CameraModel&
                                       std::optional<double> noise = std::nullopt,
                                       bool light_contrast = true) {
   PipelineConfig config = PipelineConfig::loadDefault();
-  if (!light_contrast) config.high_contrast.light_contrast_fraction = 0;
+  if (!light_contrast) {
+    // (The absolute threshold alone: no light-relative bar, nor the sparse frame's lower one.)
+    config.high_contrast.light_contrast_fraction = 0;
+    config.high_contrast.sparse_max_seed_fraction = 0;
+  }
   const IgnoreMask ignore = IgnoreMask::all(image.width(), image.height());
   const ContrastRegions regions = HighContrastDetector(config.high_contrast).run(image.view(), ignore);
   return BallProposer(p).run(image.view(), cam, ignore, regions, nullptr, noise);

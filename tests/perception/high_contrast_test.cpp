@@ -121,8 +121,10 @@ TEST(HighContrast, DarkFrameThresholdFollowsTheLight) {
     for (int x = 160; x < 168; ++x) image.at(x, y) = 60;  // d = 20 → contrast 10
     for (int x = 320; x < 328; ++x) image.at(x, y) = 66;  // d = 26 → contrast 13
   }
-  const HighContrastParams shipped = HighContrastParams::loadDefault();
+  // (The light rule alone: this frame, with one window passing, is a sparse one; see below.)
+  HighContrastParams shipped = HighContrastParams::loadDefault();
   ASSERT_DOUBLE_EQ(shipped.light_contrast_fraction, 0.3);
+  shipped.sparse_max_seed_fraction = 0;
   const ContrastRegions r =
       HighContrastDetector(shipped).run(image.view(), IgnoreMask::all(640, 480));
   EXPECT_FALSE(r.seeds[10 * r.columns + 10]);
@@ -143,6 +145,58 @@ TEST(HighContrast, DarkFrameThresholdFollowsTheLight) {
   EXPECT_TRUE(b.seeds[10 * b.columns + 20]);
 }
 
+TEST(HighContrast, ASparseFrameIsMarkedWithTheLowerBar) {
+  // A soft lens in a dim hall: two blurred blocks, 45 gray levels over carpet 50, their edges
+  // ramps of 12 px. No 16-px window reaches the frame's bar (0.3 x 50 = 15; these edges give at
+  // most some 14), so with the sparse rule the frame is marked at 0.2 x 50 = 10.
+  GrayImage image(640, 480, 50);
+  const auto block = [&](int x0, int y0, int x1, int y1) {
+    for (int y = y0 - 6; y < y1 + 6; ++y) {
+      for (int x = x0 - 6; x < x1 + 6; ++x) {
+        const double fx = std::clamp(std::min(x - (x0 - 6), (x1 + 6) - x) / 12.0, 0.0, 1.0);
+        const double fy = std::clamp(std::min(y - (y0 - 6), (y1 + 6) - y) / 12.0, 0.0, 1.0);
+        image.at(x, y) = static_cast<std::uint8_t>(std::lround(50 + 45 * std::min(fx, fy)));
+      }
+    }
+  };
+  block(100, 100, 180, 300);
+  block(400, 200, 440, 260);
+  HighContrastParams p;
+  p.light_contrast_fraction = 0.3;
+  p.sparse_max_seed_fraction = 0;
+  const IgnoreMask all = IgnoreMask::all(640, 480);
+  EXPECT_EQ(HighContrastDetector(p).run(image.view(), all).markedCount(), 0);
+  p.sparse_max_seed_fraction = 0.1;
+  p.sparse_light_contrast_fraction = 0.2;
+  const ContrastRegions soft = HighContrastDetector(p).run(image.view(), all);
+  EXPECT_GT(soft.markedCount(), 20);
+  // Every seed lies on a block's edge, none on the carpet.
+  for (int r = 0; r < soft.rows; ++r) {
+    for (int c = 0; c < soft.columns; ++c) {
+      if (!soft.seeds[r * soft.columns + c]) continue;
+      const int x = c * 16 + 8, y = r * 16 + 8;
+      const bool near_a = x > 72 && x < 208 && y > 72 && y < 328;
+      const bool near_b = x > 372 && x < 468 && y > 172 && y < 288;
+      EXPECT_TRUE(near_a || near_b) << "seed at window " << c << ", " << r;
+    }
+  }
+  // A sharp frame with the same blocks has windows enough: the rule leaves it as it is.
+  GrayImage sharp(640, 480, 50);
+  for (int y = 100; y < 300; ++y) {
+    for (int x = 100; x < 180; ++x) sharp.at(x, y) = 90;
+  }
+  for (int y = 40; y < 480; y += 100) {  // rows of dots: windows enough
+    for (int k = 0; k < 200; ++k) sharp.at(20 + 3 * k, y) = 200;
+  }
+  HighContrastParams off = p;
+  off.sparse_max_seed_fraction = 0;
+  const ContrastRegions a = HighContrastDetector(p).run(sharp.view(), all);
+  const ContrastRegions b = HighContrastDetector(off).run(sharp.view(), all);
+  ASSERT_GE(std::count(b.seeds.begin(), b.seeds.end(), 1), 0.1 * b.seeds.size());
+  EXPECT_EQ(a.seeds, b.seeds);
+  EXPECT_EQ(a.contrast, b.contrast);
+}
+
 TEST(HighContrast, ContrastThresholdDecides) {
   // Two halves of a window differing by d: between-class std = d / 2.
   GrayImage image(640, 480, 100);
@@ -152,6 +206,7 @@ TEST(HighContrast, ContrastThresholdDecides) {
   }
   HighContrastParams p;
   p.min_contrast = 22;
+  p.sparse_max_seed_fraction = 0;  // (two windows of 1200 would make it a sparse frame)
   const ContrastRegions r = HighContrastDetector(p).run(image.view(), IgnoreMask::all(640, 480));
   EXPECT_FALSE(r.seeds[10 * r.columns + 10]);
   EXPECT_TRUE(r.seeds[10 * r.columns + 20]);
@@ -180,7 +235,8 @@ ContrastRegions referenceContrast(const GrayView& image, const IgnoreMask& ignor
   out.contrast.assign(n, 0.f);
   // The light: the median of every 4th pixel of every 4th row, looked-at ones (all if none are).
   double min_contrast = p.min_contrast;
-  if (p.light_contrast_fraction > 0) {
+  double light = 0;
+  if (p.light_contrast_fraction > 0 || p.sparse_max_seed_fraction > 0) {
     std::vector<int> looked, every;
     for (int y = 2; y < image.height; y += 4) {
       for (int x = 2; x < image.width; x += 4) {
@@ -190,26 +246,47 @@ ContrastRegions referenceContrast(const GrayView& image, const IgnoreMask& ignor
     }
     std::vector<int>& v = looked.empty() ? every : looked;
     std::sort(v.begin(), v.end());
-    const double light = v[(v.size() - 1) / 2];
-    min_contrast =
-        std::min(p.min_contrast, std::max(p.light_min_contrast, p.light_contrast_fraction * light));
+    light = v[(v.size() - 1) / 2];
   }
+  const auto bar = [&](double fraction) {
+    return fraction > 0 ? std::min(p.min_contrast, std::max(p.light_min_contrast, fraction * light))
+                        : p.min_contrast;
+  };
+  min_contrast = bar(p.light_contrast_fraction);
+  // A sparse frame (few windows pass): the whole frame again with the lower bar.
+  int looked = 0, passed = 0;
   for (int r = 0; r < out.rows; ++r) {
-    for (int c = 0; c < out.columns; ++c) {
-      if (!ignore.looked(c * s + s / 2, r * s + s / 2)) continue;
-      std::vector<int> samples;
-      for (int y = r * s; y < (r + 1) * s; y += p.row_step_px) {
-        for (int x = c * s; x < (c + 1) * s; ++x) samples.push_back(image.at(x, y));
+    for (int c = 0; c < out.columns; ++c) looked += ignore.looked(c * s + s / 2, r * s + s / 2);
+  }
+  for (bool again = true; again;) {
+    again = false;
+    std::fill(out.seeds.begin(), out.seeds.end(), 0);
+    std::fill(out.contrast.begin(), out.contrast.end(), 0.f);
+    passed = 0;
+    for (int r = 0; r < out.rows; ++r) {
+      for (int c = 0; c < out.columns; ++c) {
+        if (!ignore.looked(c * s + s / 2, r * s + s / 2)) continue;
+        std::vector<int> samples;
+        for (int y = r * s; y < (r + 1) * s; y += p.row_step_px) {
+          for (int x = c * s; x < (c + 1) * s; ++x) samples.push_back(image.at(x, y));
+        }
+        double sum = 0, sq = 0;
+        for (int v : samples) sum += v, sq += v * v;
+        const double mean = sum / samples.size();
+        if (sq / samples.size() - mean * mean < min_contrast * min_contrast) continue;
+        std::uint32_t count[32] = {}, value_sum[32] = {};
+        for (int v : samples) ++count[v / 8], value_sum[v / 8] += v;
+        const OtsuResult o = otsuBinned(count, value_sum, 32);
+        out.contrast[r * out.columns + c] = static_cast<float>(o.between_std);
+        out.seeds[r * out.columns + c] = o.between_std >= min_contrast;
+        passed += o.between_std >= min_contrast;
       }
-      double sum = 0, sq = 0;
-      for (int v : samples) sum += v, sq += v * v;
-      const double mean = sum / samples.size();
-      if (sq / samples.size() - mean * mean < min_contrast * min_contrast) continue;
-      std::uint32_t count[32] = {}, value_sum[32] = {};
-      for (int v : samples) ++count[v / 8], value_sum[v / 8] += v;
-      const OtsuResult o = otsuBinned(count, value_sum, 32);
-      out.contrast[r * out.columns + c] = static_cast<float>(o.between_std);
-      out.seeds[r * out.columns + c] = o.between_std >= min_contrast;
+    }
+    const double lower = std::min(min_contrast, bar(p.sparse_light_contrast_fraction));
+    if (p.sparse_max_seed_fraction > 0 && lower < min_contrast &&
+        passed < p.sparse_max_seed_fraction * looked) {
+      min_contrast = lower;
+      again = true;
     }
   }
   const int d = p.dilation_windows;
@@ -315,6 +392,13 @@ TEST(HighContrast, SameAsTheStraightforwardDetector) {
   params[2].window_px = 20, params[2].row_step_px = 3, params[2].dilation_windows = 2;
   params[3].window_px = 13, params[3].min_contrast = 10, params[3].dilation_windows = 0;
   params[4].window_px = 64, params[4].row_step_px = 1, params[4].min_contrast = 5;
+  // The sparse-frame rule: on the dark field (few windows pass) and, with a high fraction,
+  // everywhere.
+  params.push_back(HighContrastParams{});
+  params[6].sparse_max_seed_fraction = 0.1;
+  params.push_back(HighContrastParams{});
+  params[7].sparse_max_seed_fraction = 0.9, params[7].sparse_light_contrast_fraction = 0.1;
+  params[7].window_px = 20;
   for (const auto& [name, image] : images) {
     for (std::size_t k = 0; k < params.size(); ++k) {
       for (bool with_cut : {true, false}) {

@@ -24,6 +24,11 @@ struct HighContrastParams {
   double light_contrast_fraction = 0.3;
   /// ... but never below this (gray levels): a black or a flat frame marks nothing.
   double light_min_contrast = 8;
+  /// A frame in which fewer than this fraction of the looked-at windows pass (a soft lens, where
+  /// every edge is spread over more than a window) is marked with sparse_light_contrast_fraction
+  /// instead of light_contrast_fraction (light_min_contrast still the floor). 0: never.
+  double sparse_max_seed_fraction = 0.1;
+  double sparse_light_contrast_fraction = 0.2;
   /// A window counts as looked at when its centre pixel is outside the ignored regions.
   int row_step_px = 2;        ///< a window's statistics and histogram use every this-th row
   int dilation_windows = 1;  ///< the marked set is dilated by this many windows in every direction
