@@ -51,9 +51,10 @@ colorfree_floor_test(robot_hard_feet_floor ball_hard_feet.yaml 8
   "robot.detection_rate >= 0.72" "robot.false_positives_per_frame <= 0.05")
 
 # Ball and robot behind a soft lens in a dim hall (the lens-defocus sweep, point spread 0-4 px, 5
-# cases x 4 frames, 20 balls and 20 robot-frames to detect). Measured: ball 0.750, robot 0.900, no
+# cases x 4 frames, 20 balls and 20 robot-frames to detect). Measured: ball 0.750, robot 0.950, no
 # false positive (session 19: BallNet's sharpened look at a rejected patch, without it ball 0.650;
-# the high-contrast threshold that follows the light, without it robot 0.500). One miss is the margin.
+# the high-contrast threshold that follows the light, without it robot 0.500; session 31: a sparse
+# frame's lower bar, without it robot 0.900). One miss is the margin.
 colorfree_floor_test(defocus_floor sweeps/lens_defocus.yaml 4
   "ball.detection_rate >= 0.70" "ball.false_positives_per_frame <= 0.05"
-  "robot.detection_rate >= 0.85" "robot.false_positives_per_frame <= 0.05")
+  "robot.detection_rate >= 0.90" "robot.false_positives_per_frame <= 0.05")
