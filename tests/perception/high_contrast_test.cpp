@@ -234,7 +234,6 @@ ContrastRegions referenceContrast(const GrayView& image, const IgnoreMask& ignor
   out.mask.assign(n, 0);
   out.contrast.assign(n, 0.f);
   // The light: the median of every 4th pixel of every 4th row, looked-at ones (all if none are).
-  double min_contrast = p.min_contrast;
   double light = 0;
   if (p.light_contrast_fraction > 0 || p.sparse_max_seed_fraction > 0) {
     std::vector<int> looked, every;
@@ -252,7 +251,7 @@ ContrastRegions referenceContrast(const GrayView& image, const IgnoreMask& ignor
     return fraction > 0 ? std::min(p.min_contrast, std::max(p.light_min_contrast, fraction * light))
                         : p.min_contrast;
   };
-  min_contrast = bar(p.light_contrast_fraction);
+  double min_contrast = bar(p.light_contrast_fraction);
   // A sparse frame (few windows pass): the whole frame again with the lower bar.
   int looked = 0, passed = 0;
   for (int r = 0; r < out.rows; ++r) {
