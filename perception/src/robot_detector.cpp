@@ -26,6 +26,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   if (p.mirror_min_confidence > p.mirror_max_confidence) {
     throw Error(path + ": mirror_min_confidence must not exceed mirror_max_confidence");
   }
+  p.area_min_patch_widths = f.getInRange("area_min_patch_widths", 0, 100);
   p.min_behind_robot_confidence = f.getInRange("min_behind_robot_confidence", 0, 1);
   p.behind_lower_part_fraction = f.getInRange("behind_lower_part_fraction", 0, 1);
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
@@ -130,7 +131,30 @@ void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, con
   if (count == 0) return;
   std::vector<float> probs(count * 2);
   net_.run(patches, static_cast<int>(count), probs.data());
-  const std::size_t n = static_cast<std::size_t>(net_.input().size());
+  const cnn::Shape& in = net_.input();
+  const std::size_t n = static_cast<std::size_t>(in.size());
+  // Near boxes looked at by area resampling too: the mean of both looks.
+  std::vector<std::size_t> near;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (params_.area_min_patch_widths > 0 &&
+        boxes[i].box.width() >= params_.area_min_patch_widths * in.width &&
+        mirrorable(boxes[i].box, image)) {
+      near.push_back(i);
+    }
+  }
+  if (!near.empty()) {
+    std::vector<float> area(near.size() * n), area_probs(near.size() * 2);
+    for (std::size_t k = 0; k < near.size(); ++k) {
+      cnn::extractPatch(image, robotPatchBox(boxes[near[k]]), in.width, in.height,
+                        net_.net().normalization(), area.data() + k * n,
+                        cnn::PatchResampling::kArea);
+    }
+    net_.run(area.data(), static_cast<int>(near.size()), area_probs.data());
+    for (std::size_t k = 0; k < near.size(); ++k) {
+      float& p = probs[2 * near[k] + 1];
+      p = 0.5f * (p + area_probs[2 * k + 1]);
+    }
+  }
   std::vector<std::size_t> unsure;
   for (std::size_t i = 0; i < count; ++i) {
     if (probs[2 * i + 1] >= params_.mirror_min_confidence &&

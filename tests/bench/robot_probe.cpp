@@ -89,6 +89,7 @@ int probe(int argc, char** argv) {
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
   env("RD_MIRLO", config.robot_detector.mirror_min_confidence);
   env("RD_MIRHI", config.robot_detector.mirror_max_confidence);
+  env("RD_AREA", config.robot_detector.area_min_patch_widths);
   env("RD_SHINFILL", config.robot_detector.shin_min_fill_fraction);
   env("RD_SHINGAP", config.robot_detector.shin_gap_height_fraction);
   env("RD_SHINMIN", config.robot_detector.shin_min_height_fraction);

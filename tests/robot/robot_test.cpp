@@ -1256,6 +1256,46 @@ TEST(RobotDetector, AnUnsureBoxIsScoredByTheMeanOfItsLookAndItsMirroredLook) {
   }
 }
 
+TEST(RobotDetector, ANearBoxIsScoredByTheMeanOfItsBilinearLookAndItsAreaLook) {
+  // One-pixel stripes, 30 and 230 gray, under a box ten patch widths wide: read bilinearly, its
+  // 24 samples across land on pixel centres of one parity, all dark or all bright as the box moves
+  // by a pixel; read by area, each sample is the stripes' mean, 130 gray, either way.
+  GrayImage img = carpet(17);
+  for (int y = 60; y < 420; ++y)
+    for (int x = 60; x < 640; ++x) img.at(x, y) = x % 2 ? 230 : 30;
+  const CameraModel cam = testCamera();
+  const auto score = [&](double area_min_patch_widths, double x0, double width) {
+    RobotDetectorParams params;
+    params.area_min_patch_widths = area_min_patch_widths;
+    params.mirror_min_confidence = params.mirror_max_confidence = 0;
+    params.shin_gap_height_fraction = 0;
+    std::vector<float> confidences;
+    brightnessDetector(params).run(img.view(), cam, {proposal(pixelBox(x0, 100, x0 + width, 340))},
+                                   {}, nullptr, &confidences);
+    EXPECT_EQ(confidences.size(), 1u);
+    return confidences.empty() ? -1.0 : double(confidences[0]);
+  };
+  // Bilinear alone (never area, or a box under the bar): a robot or none by one pixel's move.
+  for (const double bar : {0.0, 11.0}) {
+    SCOPED_TRACE(bar);
+    EXPECT_GT(score(bar, 100.5, 240), 0.99);
+    EXPECT_LT(score(bar, 101.5, 240), 0.01);
+  }
+  // From 10 patch widths (and from 4): the mean of that look and the area look's.
+  const double area_score = 1 / (1 + std::exp(-(40 * 130.0 / 255 - 20)));
+  for (const double bar : {10.0, 4.0}) {
+    for (const double x0 : {100.5, 101.5}) {
+      SCOPED_TRACE(bar + x0);
+      EXPECT_NEAR(score(bar, x0, 240), 0.5 * (score(0, x0, 240) + area_score), 0.01);
+    }
+  }
+  // A box under the bar (2 patch widths, bar 4) has its bilinear look alone, and so has one the
+  // image's right border cuts.
+  EXPECT_EQ(score(4, 100.5, 48), score(0, 100.5, 48));
+  EXPECT_EQ(score(4, 460.5, 240), score(0, 460.5, 240));
+  EXPECT_GT(std::abs(score(4, 460.5, 240) - score(4, 461.5, 240)), 0.9);
+}
+
 TEST(RobotDetector, AKneeBoxInsideARobotHeldBackBehindAnotherDoesNotShutItOut) {
   // A robot held back behind a nearer one (feet in its lower part, overlapping it little), and a
   // free proposal at that robot's own knee, inside its box: RobotNet accepts all three. The knee

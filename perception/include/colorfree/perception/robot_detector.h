@@ -38,6 +38,13 @@ struct RobotDetectorParams {
   /// RobotNet rejected their mirrored looks). Equal bounds: never.
   double mirror_min_confidence = 0.3;
   double mirror_max_confidence = 0.8;
+  /// A box at least this many times RobotNet's patch width (a near robot) is looked at by area
+  /// resampling too (each sample the mean of the pixels under it), and its score is the mean of
+  /// that look and the bilinear one, before the mirrored look: read bilinearly alone, such a box is
+  /// sampled at one pixel in every several, and a move of a pixel or two changes what the net
+  /// sees. Not where the image's left, right or bottom border cuts the box (as for the mirrored
+  /// look). 0: never.
+  double area_min_patch_widths = 6;
   /// A held-back candidate behind a nearer box RobotNet accepted is a robot standing behind that
   /// one (its feet at the nearer robot's knees or hands in the image), or the nearer robot's own
   /// knee, crotch or hand. It is classified too and takes part in the choice of percepts at this
@@ -170,7 +177,8 @@ class RobotDetector {
   void moveFeet(const GrayView& image, const CameraModel& camera, std::vector<RobotProposal>& boxes,
                 const std::vector<int>& which, const std::vector<float>& robot_net_patches) const;
   /// RobotNet's robot probabilities of the `count` inputs in `patches`, those of `boxes`, with the
-  /// mirrored look where it is unsure (see mirror_min_confidence), appended to `robot`.
+  /// area look at near boxes (see area_min_patch_widths) and then the mirrored look where it is
+  /// unsure (see mirror_min_confidence), appended to `robot`.
   void score(const GrayView& image, const RobotProposal* boxes, const float* patches,
              std::size_t count, std::vector<float>& robot) const;
   /// The pieces of wide groups among the first `count` of `boxes` moved sideways to where RobotNet
