@@ -133,11 +133,13 @@ void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, con
   net_.run(patches, static_cast<int>(count), probs.data());
   const cnn::Shape& in = net_.input();
   const std::size_t n = static_cast<std::size_t>(in.size());
-  // Near boxes looked at by area resampling too: the mean of both looks.
+  // Near boxes looked at by area resampling too: the mean of both looks (a net that reads its
+  // patches by area has had that look).
   std::vector<std::size_t> near;
+  const bool area_look =
+      params_.area_min_patch_widths > 0 && net_.net().resampling() != cnn::PatchResampling::kArea;
   for (std::size_t i = 0; i < count; ++i) {
-    if (params_.area_min_patch_widths > 0 &&
-        boxes[i].box.width() >= params_.area_min_patch_widths * in.width &&
+    if (area_look && boxes[i].box.width() >= params_.area_min_patch_widths * in.width &&
         mirrorable(boxes[i].box, image)) {
       near.push_back(i);
     }
