@@ -102,13 +102,20 @@ void dropPenaltyMarksUnderBalls(Frame& frame, double radii) {
   });
 }
 
-// Runs `f` and adds its duration to the stage's timing.
+// Runs `f` and returns its duration (ms).
 template <typename F>
-void timed(PipelineStats* stats, Stage stage, F&& f) {
+double elapsedMs(F&& f) {
   const auto start = std::chrono::steady_clock::now();
   f();
   const auto end = std::chrono::steady_clock::now();
-  if (stats) stats->add(stage, std::chrono::duration<double, std::milli>(end - start).count());
+  return std::chrono::duration<double, std::milli>(end - start).count();
+}
+
+// Runs `f` and adds its duration to the stage's timing.
+template <typename F>
+void timed(PipelineStats* stats, Stage stage, F&& f) {
+  const double ms = elapsedMs(f);
+  if (stats) stats->add(stage, ms);
 }
 
 }  // namespace
@@ -144,24 +151,20 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
   timed(stats, Stage::kFieldLines, [&] {
     frame.field_lines = field_lines_.run(image, frame.camera, *frame.ignore_mask, config_.keep_rejected);
   });
+  double robot_detector_ms = 0;  // RobotNet's work, with its second look at boxes on the ball
   if (robot_detector_) {
     RobotProposals proposals;
     timed(stats, Stage::kRobotProposals, [&] {
       proposals = robot_proposer_.run(image, frame.camera, *frame.ignore_mask, *frame.contrast_regions, false,
                                       frame.pixel_noise_gray);
     });
-    timed(stats, Stage::kRobotDetector, [&] {
+    robot_detector_ms = elapsedMs([&] {
       std::vector<RobotProposal> classified;
       std::vector<float> confidences;
       frame.robot_percepts = robot_detector_->run(image, frame.camera, proposals.proposals,
                                                   proposals.held_back, &classified, &confidences);
       frame.robot_proposals = std::move(classified);
       frame.robot_net_confidences = std::move(confidences);
-    });
-    timed(stats, Stage::kRobotOrientation, [&] {
-      RobotTracks this_frame_only;
-      robot_orientation_->run(image, frame.camera, *frame.robot_percepts, tracks ? *tracks : this_frame_only,
-                              frame.time_s);
     });
   }
   // The ball proposals also scan the regions in front of the detected robots' feet.
@@ -178,6 +181,22 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
       frame.ball_decisions = std::move(decisions);
     });
     dropPenaltyMarksUnderBalls(frame, config_.field_lines.penalty_mark_ball_radii);
+    // A robot box stood on the detected ball: looked at again above it, or dropped.
+    if (robot_detector_) {
+      robot_detector_ms += elapsedMs([&] {
+        frame.robot_percepts = robot_detector_->liftOffBalls(
+            image, frame.camera, *frame.robot_percepts, *frame.ball_percepts);
+      });
+    }
+  }
+  // The orientation of the robots that stay (boxes stood on the ball looked at again).
+  if (robot_detector_) {
+    if (stats) stats->add(Stage::kRobotDetector, robot_detector_ms);
+    timed(stats, Stage::kRobotOrientation, [&] {
+      RobotTracks this_frame_only;
+      robot_orientation_->run(image, frame.camera, *frame.robot_percepts,
+                              tracks ? *tracks : this_frame_only, frame.time_s);
+    });
   }
 }
 

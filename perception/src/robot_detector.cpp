@@ -48,6 +48,8 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.feet_step_height_fraction = f.getInRange("feet_step_height_fraction", 0.01, 0.5);
   p.feet_max_steps = static_cast<int>(f.getInRange("feet_max_steps", 0, 10));
   p.feet_to_centre_m = f.getInRange("feet_to_centre_m", 0, 0.3);
+  p.ball_feet_radii = f.getInRange("ball_feet_radii", 0, 10);
+  p.ball_feet_max_confidence = f.getInRange("ball_feet_max_confidence", 0, 1);
   f.finish();
   return p;
 }
@@ -97,7 +99,15 @@ std::optional<RobotProposal> feetMoved(const RobotProposal& box, const CameraMod
                                        const FieldDimensions& field) {
   const auto h = camera.robotHeightPx(box.feet_px, field.robot_height_m);
   if (!h) return std::nullopt;
-  const Eigen::Vector2d feet = box.feet_px + Eigen::Vector2d(0, dir * step_height_fraction * *h);
+  return feetMovedTo(box, camera, box.feet_px + Eigen::Vector2d(0, dir * step_height_fraction * *h),
+                     field);
+}
+
+std::optional<RobotProposal> feetMovedTo(const RobotProposal& box, const CameraModel& camera,
+                                         const Eigen::Vector2d& feet,
+                                         const FieldDimensions& field) {
+  const auto h = camera.robotHeightPx(box.feet_px, field.robot_height_m);
+  if (!h) return std::nullopt;
   const auto h_moved = camera.robotHeightPx(feet, field.robot_height_m);
   if (!h_moved) return std::nullopt;
   const double scale = *h_moved / *h;
@@ -550,6 +560,48 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   }
   if (confidences) *confidences = std::move(robot);
   if (classified) *classified = std::move(seen);
+  return out;
+}
+
+std::vector<RobotPercept> RobotDetector::liftOffBalls(const GrayView& image,
+                                                      const CameraModel& camera,
+                                                      const std::vector<RobotPercept>& robots,
+                                                      const std::vector<BallPercept>& balls) const {
+  if (params_.ball_feet_radii <= 0 || balls.empty()) return robots;
+  std::vector<RobotPercept> out;
+  for (const RobotPercept& r : robots) {
+    // A ball whose top lies above the feet point, its centre within reach of it.
+    const BallPercept* under = nullptr;
+    for (const BallPercept& b : balls) {
+      if ((r.feet_px - b.centre_px).norm() < params_.ball_feet_radii * b.radius_px &&
+          r.feet_px.y() > b.centre_px.y() - b.radius_px) {
+        under = &b;
+      }
+    }
+    if (!under || r.confidence > params_.ball_feet_max_confidence) {
+      out.push_back(r);
+      continue;
+    }
+    // Its feet at the ball's top, where a robot behind the ball shows its lowest part.
+    RobotProposal box;
+    box.box = r.box;
+    box.feet_px = r.feet_px;
+    const Eigen::Vector2d top(r.feet_px.x(), under->centre_px.y() - under->radius_px);
+    const auto lifted = feetMovedTo(box, camera, top, field_);
+    if (!lifted) continue;
+    std::vector<float> patch(static_cast<std::size_t>(net_.input().size()));
+    net_.extract(image, robotPatchBox(*lifted), patch.data());
+    std::vector<float> robot;
+    score(image, &*lifted, patch.data(), 1, robot);
+    // A second look at a box whose first place was doubtful, as a held-back candidate is.
+    if (robot[0] < std::max(params_.min_confidence, params_.min_held_back_confidence)) continue;
+    RobotPercept moved = r;
+    moved.box = lifted->box;
+    moved.feet_px = lifted->feet_px;
+    moved.confidence = robot[0];
+    moved.position_in_robot = robotGroundPoint(camera, moved.feet_px, params_.feet_to_centre_m);
+    out.push_back(moved);
+  }
   return out;
 }
 

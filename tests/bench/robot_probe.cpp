@@ -99,6 +99,8 @@ int probe(int argc, char** argv) {
   env("RD_FEETN", config.robot_detector.feet_max_steps);
   env("RD_INSIDE", config.robot_detector.max_inside_fraction);
   env("RD_IOU", config.robot_detector.max_overlap_iou);
+  env("RD_BALLR", config.robot_detector.ball_feet_radii);
+  env("RD_BALLC", config.robot_detector.ball_feet_max_confidence);
   env("RP_BESIDE", rpp.beside_width_factor);
   env("RP_LINE", rpp.line_stripe_factor);
   env("RP_LINEB", rpp.line_beside_width_factor);

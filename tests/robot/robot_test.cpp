@@ -1296,6 +1296,72 @@ TEST(RobotDetector, ANearBoxIsScoredByTheMeanOfItsBilinearLookAndItsAreaLook) {
   EXPECT_GT(std::abs(score(4, 460.5, 240) - score(4, 461.5, 240)), 0.9);
 }
 
+TEST(RobotDetector, ABoxStoodOnABallIsLookedAtAboveItOrDropped) {
+  // Two balls on dark carpet. Above the left one stands a robot (a bright box, which the stand-in
+  // net accepts) whose box the proposer drew from the ball's lower edge; above the right one there
+  // is only carpet (the box held the ball and what stands far behind it).
+  const CameraModel cam = testCamera();
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  BallPercept left_ball, right_ball;
+  left_ball.centre_px = {200, 330};
+  right_ball.centre_px = {470, 330};
+  left_ball.radius_px = right_ball.radius_px = 20;
+  const RobotProposal on_left = proposerShapedBox(cam, {200, 348});
+  const RobotProposal on_right = proposerShapedBox(cam, {470, 348});
+  const auto behind_left = feetMovedTo(on_left, cam, {200, 310}, dims);
+  ASSERT_TRUE(behind_left);
+  GrayImage img = carpet(5);
+  const PixelBox& b = behind_left->box;
+  cv::rectangle(wrap(img), cv::Point(int(b.x0), int(b.y0)), cv::Point(int(b.x1), int(b.y1)),
+                cv::Scalar(230), cv::FILLED);
+  const auto percept = [](const RobotProposal& p, double confidence) {
+    RobotPercept r;
+    r.box = p.box;
+    r.feet_px = p.feet_px;
+    r.confidence = confidence;
+    return r;
+  };
+  const RobotPercept far_from_balls = percept(proposerShapedBox(cam, {330, 250}), 0.7);
+  const RobotPercept above_right_ball = percept(proposerShapedBox(cam, {470, 305}), 0.7);
+  const std::vector<RobotPercept> robots = {percept(on_left, 0.6), percept(on_right, 0.7),
+                                            far_from_balls, above_right_ball};
+  const RobotDetector detector = brightnessDetector();
+  const auto out = detector.liftOffBalls(img.view(), cam, robots, {left_ball, right_ball});
+  // The left box stands at the ball's top now, RobotNet's score of that look its confidence; the
+  // right one is gone; a box far from the balls and one whose feet lie above the right ball's top
+  // (a robot standing behind it) stay as they were.
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_NEAR(out[0].feet_px.y(), 310, 1e-9);
+  EXPECT_NEAR(out[0].box.y1, b.y1, 1e-9);
+  EXPECT_GT(out[0].confidence, 0.99);
+  ASSERT_TRUE(out[0].position_in_robot);
+  EXPECT_EQ(out[1].feet_px, far_from_balls.feet_px);
+  EXPECT_EQ(out[1].confidence, 0.7);
+  EXPECT_EQ(out[2].feet_px, above_right_ball.feet_px);
+  // The second look needs the held-back candidates' bar.
+  RobotDetectorParams strict;
+  strict.min_held_back_confidence = 1;
+  EXPECT_EQ(brightnessDetector(strict)
+                .liftOffBalls(img.view(), cam, robots, {left_ball, right_ball})
+                .size(),
+            2u);
+  // Without the balls, or with the re-look off, or for a box RobotNet is surer of than the bound:
+  // nothing moves.
+  EXPECT_EQ(detector.liftOffBalls(img.view(), cam, robots, {}).size(), 4u);
+  RobotDetectorParams off;
+  off.ball_feet_radii = 0;
+  EXPECT_EQ(
+      brightnessDetector(off).liftOffBalls(img.view(), cam, robots, {left_ball, right_ball}).size(),
+      4u);
+  RobotDetectorParams sure;
+  sure.ball_feet_max_confidence = 0.65;
+  const auto kept =
+      brightnessDetector(sure).liftOffBalls(img.view(), cam, robots, {left_ball, right_ball});
+  ASSERT_EQ(kept.size(), 4u);  // the left box (0.6) looked at again; the right one (0.7) stays
+  EXPECT_NEAR(kept[0].feet_px.y(), 310, 1e-9);
+  EXPECT_EQ(kept[1].feet_px, on_right.feet_px);
+}
+
 TEST(RobotDetector, AKneeBoxInsideARobotHeldBackBehindAnotherDoesNotShutItOut) {
   // A robot held back behind a nearer one (feet in its lower part, overlapping it little), and a
   // free proposal at that robot's own knee, inside its box: RobotNet accepts all three. The knee

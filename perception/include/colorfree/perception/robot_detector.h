@@ -105,6 +105,13 @@ struct RobotDetectorParams {
   /// The robot's ground point (between its feet: the pose's position) lies this far beyond its
   /// feet point, the nearest edge of its feet in the image, along the line of sight (m).
   double feet_to_centre_m = 0.07;
+  /// A percept whose feet point lies below a detected ball's top and within ball_feet_radii x
+  /// the ball's image radius of its centre, RobotNet not above ball_feet_max_confidence, stood
+  /// its box on the ball: it is looked at again with its feet at the ball's top (a robot behind
+  /// the ball) and stays there from min_held_back_confidence; otherwise it was the ball with what
+  /// stands behind it and goes (see RobotDetector::liftOffBalls; 0 radii: never).
+  double ball_feet_radii = 1.5;
+  double ball_feet_max_confidence = 1.0;
 
   bool operator==(const RobotDetectorParams&) const = default;
   static RobotDetectorParams load(const std::string& path);
@@ -144,6 +151,10 @@ std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel
 std::optional<RobotProposal> feetMoved(const RobotProposal& box, const CameraModel& camera,
                                        double step_height_fraction, int dir,
                                        const FieldDimensions& field);
+/// The box with its feet point moved to `feet`, scaled about the feet by the expected heights'
+/// ratio. Empty where no robot can stand.
+std::optional<RobotProposal> feetMovedTo(const RobotProposal& box, const CameraModel& camera,
+                                         const Eigen::Vector2d& feet, const FieldDimensions& field);
 
 /// Classifies robot proposals with RobotNet (24×24, paper 2.3) and turns the accepted ones into
 /// percepts with their ground point in the robot frame. With RobotFeetNet (24×24: the feet row
@@ -169,6 +180,13 @@ class RobotDetector {
                                 const std::vector<HeldBackRobotProposal>& held_back,
                                 std::vector<RobotProposal>* classified,
                                 std::vector<float>* confidences = nullptr) const;
+  /// Once the ball is detected: each percept whose feet point lies on a ball (see
+  /// ball_feet_radii, ball_feet_max_confidence) is looked at again by RobotNet with its feet at
+  /// the ball's top; it stays there (box, feet, confidence, ground point) when RobotNet gives that
+  /// look min_held_back_confidence, and goes otherwise. The others stay as they are.
+  std::vector<RobotPercept> liftOffBalls(const GrayView& image, const CameraModel& camera,
+                                         const std::vector<RobotPercept>& robots,
+                                         const std::vector<BallPercept>& balls) const;
 
  private:
   /// The boxes `which` of `boxes` moved to their robots' feet (RobotFeetNet, see
