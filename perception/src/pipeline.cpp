@@ -181,16 +181,16 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
       frame.ball_decisions = std::move(decisions);
     });
     dropPenaltyMarksUnderBalls(frame, config_.field_lines.penalty_mark_ball_radii);
-    // A robot box stood on the detected ball: looked at again above it, or dropped.
-    if (robot_detector_) {
+  }
+  if (robot_detector_) {
+    // A robot box stood on a detected ball: looked at again above it, or dropped; then the
+    // orientation of the robots that stay.
+    if (ball_detector_ && frame.ball_percepts) {
       robot_detector_ms += elapsedMs([&] {
         frame.robot_percepts = robot_detector_->liftOffBalls(
             image, frame.camera, *frame.robot_percepts, *frame.ball_percepts);
       });
     }
-  }
-  // The orientation of the robots that stay (boxes stood on the ball looked at again).
-  if (robot_detector_) {
     if (stats) stats->add(Stage::kRobotDetector, robot_detector_ms);
     timed(stats, Stage::kRobotOrientation, [&] {
       RobotTracks this_frame_only;
