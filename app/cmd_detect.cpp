@@ -149,6 +149,12 @@ RobotOrientationEstimator orientationEstimator(const PipelineConfig& config) {
 nlohmann::json orientationLinesJson(const RobotLines& lines) {
   nlohmann::json o;
   o["silhouette_points"] = lines.silhouette_px.size();
+  o["silhouette_px"] = nlohmann::json::array();
+  o["silhouette_in_robot_m"] = nlohmann::json::array();
+  for (std::size_t k = 0; k < lines.silhouette_px.size(); ++k) {
+    o["silhouette_px"].push_back(vec(lines.silhouette_px[k]));
+    o["silhouette_in_robot_m"].push_back(vec(lines.silhouette_in_robot[k]));
+  }
   o["regions"] = nlohmann::json::array();
   for (const auto& region : lines.regions) {
     const Eigen::Vector2d d = region.line_in_robot.direction();
