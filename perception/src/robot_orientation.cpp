@@ -44,6 +44,7 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.second_line_max_refined_cos = f.getInRange("second_line_max_refined_cos", 0, 1);
   p.min_line_votes = f.getInRange("min_line_votes", 0, 1000);
   p.line_max_voter_gap_m = f.getInRange("line_max_voter_gap_m", 0, 2);
+  p.line_max_feet_distance_m = f.getInRange("line_max_feet_distance_m", 0, 10);
   p.region_margin_fraction = f.getInRange("region_margin_fraction", 0, 2);
   p.region_above_fraction = f.getInRange("region_above_fraction", 0, 2);
   p.region_below_fraction = f.getInRange("region_below_fraction", 0, 2);
@@ -662,6 +663,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   bounds.max_voter_gap = p.line_max_voter_gap_m;
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
   std::optional<Eigen::Vector2d> first_direction;
+  const std::optional<Eigen::Vector2d> feet_on_ground = camera.pixelToGround(robot.feet_px);
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
     // Twice: the hull edge's direction is rough, the first fit's much less so.
@@ -672,6 +674,12 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     // The feet's edges meet at right angles: a refitted second line far from orthogonal to the
     // refitted first is no edge of the feet (its class would contradict or mislead the first's).
     if (first_direction && std::abs(line->direction().dot(*first_direction)) > p.second_line_max_refined_cos) {
+      continue;
+    }
+    // Far behind the feet point it is the edge of lit carpet or of a field line in the feet
+    // region, not the feet's.
+    if (p.line_max_feet_distance_m > 0 && feet_on_ground &&
+        ((line->a + line->b) / 2 - *feet_on_ground).norm() > p.line_max_feet_distance_m) {
       continue;
     }
     if (!first_direction) first_direction = line->direction();

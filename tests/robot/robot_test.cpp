@@ -1784,6 +1784,38 @@ TEST(LinesGenerator, FindsAnEdgeOfATurnedFootBlock) {
   for (double yaw : {30.0, -50.0, 15.0, 70.0, -35.0}) checkFootBlockLine(yaw);
 }
 
+// A bright-above-dark edge in the feet region well behind the feet point (lit carpet beyond the
+// robot, a field line's edge, or a feet point put too low) is not the feet's: no line there; one
+// a little behind it still is, and without the limit the far one is too.
+TEST(LinesGenerator, DropsALineFarBehindTheFeetPoint) {
+  const CameraModel cam = testCamera();
+  const Eigen::Vector2d feet_centre(1.2, 0.0);
+  const RobotPercept robot = perceptOfBlock(cam, footBlockHull(cam, feet_centre, 0), feet_centre);
+  const auto feet = cam.pixelToGround(robot.feet_px);
+  ASSERT_TRUE(feet);
+  const double limit = RobotOrientationParams::loadDefault().line_max_feet_distance_m;
+  ASSERT_GT(limit, 0);
+  for (const double behind_m : {0.5 * limit, 1.5 * limit}) {
+    SCOPED_TRACE(behind_m);
+    GrayImage img = carpet(5);
+    const Eigen::Vector2d centre = feet_centre + Eigen::Vector2d(behind_m, 0);
+    cv::fillConvexPoly(wrap(img), footBlockHull(cam, centre, 0), cv::Scalar(200));
+    for (const double max_distance : {limit, 0.0}) {
+      RobotOrientationParams params = RobotOrientationParams::loadDefault();
+      params.line_max_feet_distance_m = max_distance;
+      const RobotLines lines = untrainedEstimator(params).findLines(img.view(), cam, robot);
+      if (max_distance > 0 && behind_m > limit) {
+        EXPECT_TRUE(lines.regions.empty());
+        continue;
+      }
+      ASSERT_FALSE(lines.regions.empty()) << max_distance;
+      // The block's near edge, as far behind the feet point as the block was moved.
+      const LineHypothesis& line = lines.regions[0].line_in_robot;
+      EXPECT_NEAR(((line.a + line.b) / 2 - *feet).x(), behind_m, 0.03) << max_distance;
+    }
+  }
+}
+
 // Directional light: the block's cast shadow below it has the carpet above its near edge. The
 // silhouette keeps only edges with more than the carpet above them: the block's, not the shadow's
 // (which, without that test, would be the lowest chain and so the silhouette).

@@ -83,6 +83,9 @@ struct RobotOrientationParams {
   /// A line's voters further apart than this along it are two pieces; only the one with the most
   /// voters votes and is refitted (0: no limit)
   double line_max_voter_gap_m = 0.1;
+  /// A line whose middle lies farther than this from the feet point's ground position is not the
+  /// feet's edge (0: no limit)
+  double line_max_feet_distance_m = 0.3;
   double region_margin_fraction = 0.25;      ///< region: line width grown by this at both ends
   double region_above_fraction = 0.35;       ///< region height above the line, in robot heights
   double region_below_fraction = 0.06;       ///< below the line, in robot heights
