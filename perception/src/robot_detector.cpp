@@ -94,23 +94,15 @@ RobotDetector RobotDetector::loadDefault() {
       FieldDimensions::loadDefault(), cnn::Classifier::load(f.cfgPath(), f.weightsPath()));
 }
 
-std::optional<RobotProposal> feetMoved(const RobotProposal& box, const CameraModel& camera,
-                                       double step_height_fraction, int dir,
-                                       const FieldDimensions& field) {
-  const auto h = camera.robotHeightPx(box.feet_px, field.robot_height_m);
-  if (!h) return std::nullopt;
-  return feetMovedTo(box, camera, box.feet_px + Eigen::Vector2d(0, dir * step_height_fraction * *h),
-                     field);
-}
+namespace {
 
-std::optional<RobotProposal> feetMovedTo(const RobotProposal& box, const CameraModel& camera,
-                                         const Eigen::Vector2d& feet,
-                                         const FieldDimensions& field) {
-  const auto h = camera.robotHeightPx(box.feet_px, field.robot_height_m);
-  if (!h) return std::nullopt;
+// feetMovedTo with the box's expected robot height at its feet point, `h` px, already known.
+std::optional<RobotProposal> movedWithHeight(const RobotProposal& box, double h,
+                                             const CameraModel& camera, const Eigen::Vector2d& feet,
+                                             const FieldDimensions& field) {
   const auto h_moved = camera.robotHeightPx(feet, field.robot_height_m);
   if (!h_moved) return std::nullopt;
-  const double scale = *h_moved / *h;
+  const double scale = *h_moved / h;
   RobotProposal out = box;
   out.feet_px = feet;
   out.box.x0 = feet.x() + (box.box.x0 - box.feet_px.x()) * scale;
@@ -118,6 +110,25 @@ std::optional<RobotProposal> feetMovedTo(const RobotProposal& box, const CameraM
   out.box.y0 = feet.y() + (box.box.y0 - box.feet_px.y()) * scale;
   out.box.y1 = feet.y() + (box.box.y1 - box.feet_px.y()) * scale;
   return out;
+}
+
+}  // namespace
+
+std::optional<RobotProposal> feetMoved(const RobotProposal& box, const CameraModel& camera,
+                                       double step_height_fraction, int dir,
+                                       const FieldDimensions& field) {
+  const auto h = camera.robotHeightPx(box.feet_px, field.robot_height_m);
+  if (!h) return std::nullopt;
+  return movedWithHeight(box, *h, camera,
+                         box.feet_px + Eigen::Vector2d(0, dir * step_height_fraction * *h), field);
+}
+
+std::optional<RobotProposal> feetMovedTo(const RobotProposal& box, const CameraModel& camera,
+                                         const Eigen::Vector2d& feet,
+                                         const FieldDimensions& field) {
+  const auto h = camera.robotHeightPx(box.feet_px, field.robot_height_m);
+  if (!h) return std::nullopt;
+  return movedWithHeight(box, *h, camera, feet, field);
 }
 
 namespace {
