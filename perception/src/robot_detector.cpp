@@ -150,12 +150,10 @@ bool mirrorable(const PixelBox& box, const GrayView& image) {
 void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, const float* patches,
                           std::size_t count, std::vector<float>& robot) const {
   if (count == 0) return;
-  std::vector<float> probs(count * 2);
-  net_.run(patches, static_cast<int>(count), probs.data());
   const cnn::Shape& in = net_.input();
   const std::size_t n = static_cast<std::size_t>(in.size());
   // Near boxes looked at by area resampling too: the mean of both looks (a net that reads its
-  // patches by area has had that look).
+  // patches by area has had that look). Both looks in one batch.
   std::vector<std::size_t> near;
   const bool area_look =
       params_.area_min_patch_widths > 0 && net_.net().resampling() != cnn::PatchResampling::kArea;
@@ -165,17 +163,21 @@ void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, con
       near.push_back(i);
     }
   }
-  if (!near.empty()) {
-    std::vector<float> area(near.size() * n), area_probs(near.size() * 2);
+  std::vector<float> probs((count + near.size()) * 2);
+  if (near.empty()) {
+    net_.run(patches, static_cast<int>(count), probs.data());
+  } else {
+    std::vector<float> looks((count + near.size()) * n);
+    std::copy_n(patches, count * n, looks.data());
     for (std::size_t k = 0; k < near.size(); ++k) {
       cnn::extractPatch(image, robotPatchBox(boxes[near[k]]), in.width, in.height,
-                        net_.net().normalization(), area.data() + k * n,
+                        net_.net().normalization(), looks.data() + (count + k) * n,
                         cnn::PatchResampling::kArea);
     }
-    net_.run(area.data(), static_cast<int>(near.size()), area_probs.data());
+    net_.run(looks.data(), static_cast<int>(count + near.size()), probs.data());
     for (std::size_t k = 0; k < near.size(); ++k) {
       float& p = probs[2 * near[k] + 1];
-      p = 0.5f * (p + area_probs[2 * k + 1]);
+      p = 0.5f * (p + probs[2 * (count + k) + 1]);
     }
   }
   std::vector<std::size_t> unsure;
