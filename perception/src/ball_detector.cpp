@@ -20,6 +20,7 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.patch_diameters = f.getInRange("patch_diameters", 0.5, 4);
   p.boost_keep_count = static_cast<int>(f.getInRange("boost_keep_count", 1, 100));
   p.boost_min_confidence = f.getInRange("boost_min_confidence", 0, 1);
+  p.boost_border_mirror = static_cast<int>(f.getInRange("boost_border_mirror", 0, 1));
   p.ball_min_confidence = f.getInRange("ball_min_confidence", 0, 1);
   p.max_balls = static_cast<int>(f.getInRange("max_balls", 1, 100));
   p.max_centre_outside_radii = f.getInRange("max_centre_outside_radii", 0, 100);
@@ -33,10 +34,12 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.rescale_up = f.getInRange("rescale_up", 0, 4);
   p.rescale_down = f.getInRange("rescale_down", 0, 1);
   p.rescale_min_confidence = f.getInRange("rescale_min_confidence", 0, 1);
+  p.rescale_min_radius_px = f.getInRange("rescale_min_radius_px", 0, 1000);
   p.sharpen_sigma_radii = f.getInRange("sharpen_sigma_radii", 0, 2);
   p.sharpen_amount = f.getInRange("sharpen_amount", 0, 20);
   p.sharpen_min_radius_px = f.getInRange("sharpen_min_radius_px", 0, 1000);
   p.sharpen_min_confidence = f.getInRange("sharpen_min_confidence", 0, 1);
+  p.border_mirror_min_confidence = f.getInRange("border_mirror_min_confidence", 0, 2);
   f.finish();
   return p;
 }
@@ -98,6 +101,31 @@ double grayAt(const GrayView& image, double x, double y) {
   const double top = image.at(x0, y0) + fx * (image.at(x1, y0) - image.at(x0, y0));
   const double bottom = image.at(x0, y1) + fx * (image.at(x1, y1) - image.at(x0, y1));
   return top + fy * (bottom - top);
+}
+
+// Whether `box` reaches beyond the image.
+bool cutByBorder(const cnn::PatchBox& box, const GrayView& image) {
+  return box.x_px < 0 || box.y_px < 0 || box.x_px + box.width_px > image.width ||
+         box.y_px + box.height_px > image.height;
+}
+
+// The pixels under `box` (and one more on every side) with those beyond the image mirrored about
+// its border; `local` is `box` in the returned image's coordinates.
+GrayImage mirroredAtBorder(const GrayView& image, const cnn::PatchBox& box, cnn::PatchBox& local) {
+  const int x0 = static_cast<int>(std::floor(box.x_px)) - 1, y0 = static_cast<int>(std::floor(box.y_px)) - 1;
+  const int x1 = static_cast<int>(std::ceil(box.x_px + box.width_px)) + 1;
+  const int y1 = static_cast<int>(std::ceil(box.y_px + box.height_px)) + 1;
+  // (a second reflection for a box more than the image's size beyond it: clamped instead)
+  const auto reflect = [](int i, int n) { return std::clamp(i < 0 ? -1 - i : i >= n ? 2 * n - 1 - i : i, 0, n - 1); };
+  GrayImage out(x1 - x0, y1 - y0);
+  for (int y = y0; y < y1; ++y) {
+    const std::uint8_t* row = image.row(reflect(y, image.height));
+    for (int x = x0; x < x1; ++x) out.at(x - x0, y - y0) = row[reflect(x, image.width)];
+  }
+  local = box;
+  local.x_px -= static_cast<float>(x0);
+  local.y_px -= static_cast<float>(y0);
+  return out;
 }
 
 }  // namespace
@@ -178,6 +206,27 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   }
   std::vector<float> boost_prob;
   boost_net_.classify(image, boxes, boost_prob);
+  // A proposal the image border cuts: BoostBallNet's score is the larger of its look at the patch
+  // and at the patch mirrored about the border (the cut part repeats the border pixel otherwise).
+  if (params_.boost_border_mirror) {
+    std::vector<std::size_t> cut;
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      if (cutByBorder(boxes[i], image)) cut.push_back(i);
+    }
+    if (!cut.empty()) {
+      const std::size_t count = static_cast<std::size_t>(boost_net_.input().size());
+      std::vector<float> inputs(cut.size() * count), prob(cut.size() * 2);
+      for (std::size_t m = 0; m < cut.size(); ++m) {
+        cnn::PatchBox local;
+        const GrayImage part = mirroredAtBorder(image, boxes[cut[m]], local);
+        boost_net_.extract(part.view(), local, inputs.data() + m * count);
+      }
+      boost_net_.run(inputs.data(), static_cast<int>(cut.size()), prob.data());
+      for (std::size_t m = 0; m < cut.size(); ++m) {
+        boost_prob[2 * cut[m] + 1] = std::max(boost_prob[2 * cut[m] + 1], prob[2 * m + 1]);
+      }
+    }
+  }
   std::vector<int> order(proposals.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(),
@@ -226,10 +275,10 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   std::vector<cnn::PatchBox> rescaled_boxes;
   std::vector<std::pair<std::size_t, double>> rescaled;  // (k, scale)
   for (std::size_t k = 0; k < kept.size(); ++k) {
-    if (ball_prob[2 * k + 1] >= params_.ball_min_confidence) continue;
+    const BallProposal& p = proposals[kept[k]];
+    if (ball_prob[2 * k + 1] >= params_.ball_min_confidence || p.radius_px < params_.rescale_min_radius_px) continue;
     for (const double s : {params_.rescale_up, params_.rescale_down}) {
       if (s <= 0) continue;
-      const BallProposal& p = proposals[kept[k]];
       rescaled_boxes.push_back(ballPatchBox(p.centre_px, p.radius_px * s, params_.patch_diameters));
       rescaled.emplace_back(k, s);
     }
@@ -275,6 +324,30 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     }
   }
 
+  // Rejected kept patches the image border cuts that no other look took, mirrored at the border.
+  std::vector<float> mirrored_conf(kept.size(), -1.0f);
+  if (params_.border_mirror_min_confidence <= 1) {
+    std::vector<std::size_t> which;
+    std::vector<float> inputs;
+    const std::size_t count = static_cast<std::size_t>(ball_net_.input().size());
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      if (ball_prob[2 * k + 1] >= params_.ball_min_confidence || rescaled_conf[k] >= 0 ||
+          sharpened_conf[k] >= params_.sharpen_min_confidence || !cutByBorder(kept_boxes[k], image)) {
+        continue;
+      }
+      cnn::PatchBox local;
+      const GrayImage part = mirroredAtBorder(image, kept_boxes[k], local);
+      inputs.resize((which.size() + 1) * count);
+      ball_net_.extract(part.view(), local, inputs.data() + which.size() * count);
+      which.push_back(k);
+    }
+    if (!which.empty()) {
+      std::vector<float> prob(which.size() * 2);
+      ball_net_.run(inputs.data(), static_cast<int>(which.size()), prob.data());
+      for (std::size_t m = 0; m < which.size(); ++m) mirrored_conf[which[m]] = prob[2 * m + 1];
+    }
+  }
+
   std::vector<BallPercept> out;
   std::vector<BallDecision> all(proposals.size());
   for (std::size_t i = 0; i < proposals.size(); ++i) {
@@ -296,8 +369,11 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
       hits.emplace_back(rescaled_conf[k], i);
     } else if (sharpened_conf[k] >= params_.sharpen_min_confidence) {
       hits.emplace_back(sharpened_conf[k], i);
+    } else if (mirrored_conf[k] >= params_.border_mirror_min_confidence) {
+      hits.emplace_back(mirrored_conf[k], i);
     }
     all[i].sharpened_confidence = sharpened_conf[k];
+    all[i].mirrored_confidence = mirrored_conf[k];
     // (SmearedBallNet's answer counts for a patch neither other look took: one hit per proposal.)
     if (smeared[k]) {
       all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];

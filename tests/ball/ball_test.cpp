@@ -410,6 +410,26 @@ TEST(BallDetection, CameraPitchOffByFiveDegreesStillFindsTheBall) {
   }
 }
 
+// The rescaled look is gated by the proposal's radius: the ball 2.5 m away that the camera's
+// believed pitch (28° where it is 22°) frames too small is found through it from a bar under the
+// proposal's radius, not from one above it.
+TEST(BallDetector, NoRescaledLookUnderItsMinimumRadius) {
+  const CameraModel drawn_with = test::testCamera(22), believed = test::testCamera(28);
+  GrayImage image = test::renderScene(drawn_with, carpetOnly(8));
+  const test::DrawnBall b = test::drawBall(image, drawn_with, {2.5, 0.1});
+  const Found f = runPipeline(image, believed);
+  const int i = matchIndex(f.proposals, b);
+  ASSERT_GE(i, 0) << describe(f.proposals);
+  const double r = f.proposals[static_cast<std::size_t>(i)].radius_px;
+  ASSERT_GE(r, BallDetectorParams::loadDefault().rescale_min_radius_px);
+  for (const double bar : {r - 0.5, r + 0.5}) {
+    BallDetectorParams p = BallDetectorParams::loadDefault();
+    p.rescale_min_radius_px = bar;
+    const auto balls = BallDetector::load(p).run(image.view(), believed, f.proposals);
+    EXPECT_EQ(detected(balls, b), bar < r) << "bar " << bar << ", proposal radius " << r;
+  }
+}
+
 // The same noise on blank carpet: no ball.
 TEST(BallDetection, NothingOnNoisyBlankCarpet) {
   const CameraModel cam = test::testCamera(22);
@@ -736,6 +756,59 @@ TEST(BallDetector, SharpenedLookFindsNoBallOnASoftLineCrossingOrFoot) {
     EXPECT_TRUE(std::any_of(d.begin(), d.end(),
                             [](const BallDecision& x) { return x.sharpened_confidence >= 0; }))
         << sigma << describe(props);
+  }
+}
+
+// A ball the image's left or right border cuts to some 70 % in view: the patch repeats the border
+// pixel over the cut part and BallNet rejects it; mirrored about the border the visible part
+// completes a ball, which the shipped detector takes. The same look at a foot and at a line crossing
+// the border cuts (every proposal let through BoostBallNet) finds nothing.
+TEST(BallDetector, MirroredLookFindsABallTheBorderCuts) {
+  const CameraModel cam = test::testCamera(22);
+  const BallDetectorParams shipped = BallDetectorParams::loadDefault();
+  ASSERT_LE(shipped.border_mirror_min_confidence, 1);
+  BallDetectorParams off = shipped;
+  off.border_mirror_min_confidence = 2;
+  int rejected_without = 0;
+  for (const double d : {0.6, 0.7, 0.8, 1.0}) {
+    for (const bool left : {true, false}) {
+      // The ball's centre 0.3 radii inside the border (some 70 % in view), on the row of a ball d ahead.
+      const Eigen::Vector2d ahead = *cam.robotToPixel(Eigen::Vector3d(d, 0, 0.05));
+      const double r = *cam.ballRadiusPx(ahead, 0.05);
+      const Eigen::Vector2d target(left ? 0.3 * r : cam.intrinsics().width_px - 0.3 * r, ahead.y());
+      GrayImage image = test::renderScene(cam, carpetOnly(6));
+      const test::DrawnBall b = test::drawBall(image, cam, *cam.pixelToGround(target, 0.05));
+      const std::vector<BallProposal> props = {{b.centre_px, b.radius_px, 1}};
+      std::vector<BallDecision> with, without;
+      const auto balls = BallDetector::load(shipped).run(image.view(), cam, props, &with);
+      BallDetector::load(off).run(image.view(), cam, props, &without);
+      ASSERT_EQ(balls.size(), 1u) << d << (left ? " left" : " right");
+      EXPECT_TRUE(with[0].detected);
+      rejected_without += !without[0].detected;
+      if (with[0].ball_confidence < shipped.ball_min_confidence) {
+        EXPECT_GE(with[0].mirrored_confidence, shipped.border_mirror_min_confidence) << d << (left ? " left" : " right");
+        EXPECT_FALSE(without[0].detected) << d << (left ? " left" : " right");
+      }
+    }
+  }
+  EXPECT_GT(rejected_without, 0) << "BallNet took every cut ball without the mirrored look";
+  // A foot and a line crossing at the left border.
+  test::SyntheticScene scene = carpetOnly(9);
+  const Eigen::Vector2d at_border = *cam.pixelToGround({3, 300}, 0);
+  scene.segments.push_back({{at_border.x() - 1, at_border.y()}, {at_border.x() + 1, at_border.y()}});
+  scene.segments.push_back({{at_border.x(), at_border.y() - 1}, {at_border.x(), at_border.y() + 1}});
+  GrayImage image = test::renderScene(cam, scene);
+  test::drawFoot(image, cam, *cam.pixelToGround({5, 400}, 0));
+  BallDetectorParams all = shipped;
+  all.boost_min_confidence = 0;
+  for (const auto& [pixel, what] : {std::pair{Eigen::Vector2d(3, 300), "crossing"}, std::pair{Eigen::Vector2d(5, 400), "foot"}}) {
+    const double r = *cam.ballRadiusPx(pixel, 0.05);
+    std::vector<BallProposal> props;
+    for (const double dx : {-0.5, 0.0, 0.5}) props.push_back({{pixel.x() + dx * r, pixel.y()}, r, 1});
+    std::vector<BallDecision> d;
+    EXPECT_TRUE(BallDetector::load(all).run(image.view(), cam, props, &d).empty()) << what;
+    EXPECT_TRUE(std::any_of(d.begin(), d.end(), [](const BallDecision& x) { return x.mirrored_confidence >= 0; }))
+        << what << ": no mirrored look";
   }
 }
 

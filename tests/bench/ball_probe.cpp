@@ -64,6 +64,7 @@ int probe(int argc, char** argv) {
   if (const char* m = std::getenv("BP_MAXCOUNT")) config.ball_proposer.max_count = std::atoi(m);
   if (const char* m = std::getenv("BP_MODELS")) config.model_dir = m;  // nets to try
   if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
+  if (const char* b = std::getenv("BP_BOOSTMIRROR")) config.ball_detector.boost_border_mirror = std::atoi(b);
   env("BP_SMEAR", config.ball_detector.smeared_min_coherence);
   env("BP_CAMSMEAR", config.ball_detector.smeared_min_camera_smear_radii);
   env("BP_SMEARDIR", config.ball_detector.smeared_max_direction_deg);
@@ -71,11 +72,13 @@ int probe(int argc, char** argv) {
   env("BP_UP", config.ball_detector.rescale_up);
   env("BP_DOWN", config.ball_detector.rescale_down);
   env("BP_RESCONF", config.ball_detector.rescale_min_confidence);
+  env("BP_RESCMINR", config.ball_detector.rescale_min_radius_px);
   env("BP_SMEARCONF", config.ball_detector.smeared_ball_min_confidence);
   env("BP_SHARP", config.ball_detector.sharpen_sigma_radii);
   env("BP_SHARPAMT", config.ball_detector.sharpen_amount);
   env("BP_SHARPCONF", config.ball_detector.sharpen_min_confidence);
   env("BP_SHARPMINR", config.ball_detector.sharpen_min_radius_px);
+  env("BP_MIRROR", config.ball_detector.border_mirror_min_confidence);
   env("HC_LIGHT", config.high_contrast.light_contrast_fraction);
   // BP_EXACT=1: each proposal's centre, radius and response also printed in full (hexadecimal).
   const bool exact = std::getenv("BP_EXACT") != nullptr;
@@ -137,6 +140,7 @@ int probe(int argc, char** argv) {
                       d.smeared_confidence, cam.norm() / p.radius_px, angle);
         }
         if (d.sharpened_confidence >= 0) std::printf(" sharp=%.3f", d.sharpened_confidence);
+        if (d.mirrored_confidence >= 0) std::printf(" mirror=%.3f", d.mirrored_confidence);
         std::printf("\n");
         // Every bit of the proposal (a speedup must leave them as they were).
         if (exact) {

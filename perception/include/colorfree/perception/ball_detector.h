@@ -19,6 +19,9 @@ struct BallDetectorParams {
   double patch_diameters = 1.25;
   int boost_keep_count = 5;              ///< BoostBallNet passes at most this many to BallNet
   double boost_min_confidence = 0.05;    ///< ... and only those with at least this "ball" score
+  /// 1: a proposal the image border cuts is scored by BoostBallNet's look at its patch and at the
+  /// patch mirrored about the border, the larger counting (0: the first look only).
+  int boost_border_mirror = 1;
   double ball_min_confidence = 0.5;      ///< BallNet's "ball" score for a detection
   int max_balls = 1;                     ///< detections per frame at most (the strongest)
   /// A proposal whose centre lies more than this × its radius outside the image shows less than
@@ -48,6 +51,9 @@ struct BallDetectorParams {
   double rescale_up = 1.6;
   double rescale_down = 0.7;
   double rescale_min_confidence = 0.99;
+  /// ... for proposals of at least this radius (0: any): a smaller one's patch, some 12 px, says
+  /// too little at another scale (far boards' stripes at the floor took that look).
+  double rescale_min_radius_px = 5;
   /// A kept patch BallNet rejects (and the rescaled look did not take) gets a look through an
   /// unsharp mask (`cnn::unsharpMask`) of this blur, in ball radii (a soft lens blurs the ball's
   /// print, which BallNet reads; the mask restores some of it) ... 0: no such look.
@@ -57,6 +63,10 @@ struct BallDetectorParams {
   /// input, blurred by the resampling rather than the lens, and sharpening it makes up prints ...
   double sharpen_min_radius_px = 10;
   double sharpen_min_confidence = 0.99;  ///< ... and is detected from this BallNet score there.
+  /// A kept patch BallNet rejects (and no other look took) that the image border cuts gets a look
+  /// with the part beyond the border mirrored about it (the ball's visible part completing it, where
+  /// the patch otherwise repeats the border pixel), detected from this BallNet score (above 1: never).
+  double border_mirror_min_confidence = 0.9;
 
   bool operator==(const BallDetectorParams&) const = default;
   static BallDetectorParams load(const std::string& path);
@@ -102,6 +112,8 @@ struct BallDecision {
   float smeared_confidence = -1;   ///< SmearedBallNet's "ball" probability; -1 when it did not run
   /// BallNet's "ball" probability on the sharpened patch; -1 when it did not look
   float sharpened_confidence = -1;
+  /// BallNet's "ball" probability on the patch mirrored at the image border; -1 when it did not look
+  float mirrored_confidence = -1;
   bool detected = false;
 };
 
@@ -110,7 +122,8 @@ struct BallDecision {
 /// (`smeared_min_coherence`) gets a second look by SmearedBallNet (BallNet's shape, trained on such
 /// patches only), and BallNet looks again at it framed larger and smaller (rescale_*: the camera
 /// pose the expected radius came from may be off) and, if neither framing takes, sharpened
-/// (sharpen_*: a soft lens).
+/// (sharpen_*: a soft lens), and, cut by the image border, mirrored about it (border_mirror_*;
+/// BoostBallNet scores such a proposal by the better of both looks too).
 /// Nets read from perception/models by default.
 class BallDetector {
  public:
