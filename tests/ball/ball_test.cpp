@@ -812,6 +812,35 @@ TEST(BallDetector, MirroredLookFindsABallTheBorderCuts) {
   }
 }
 
+// BoostBallNet scores a proposal the border cuts by the better of its look at the patch and at the
+// patch mirrored about the border: never lower than the first look alone, higher for cut balls
+// whose mirrored patch looks more like a ball; a proposal inside the image keeps its one look.
+TEST(BallDetector, BoostBallNetTakesTheBetterOfTheCutAndTheMirroredPatch) {
+  const CameraModel cam = test::testCamera(22);
+  const BallDetectorParams shipped = BallDetectorParams::loadDefault();
+  ASSERT_EQ(shipped.boost_border_mirror, 1);
+  BallDetectorParams off = shipped;
+  off.boost_border_mirror = 0;
+  int raised = 0;
+  for (const double d : {0.6, 0.7, 0.8, 1.0}) {
+    for (const double in : {0.0, 0.3}) {
+      const Eigen::Vector2d ahead = *cam.robotToPixel(Eigen::Vector3d(d, 0, 0.05));
+      const double r = *cam.ballRadiusPx(ahead, 0.05);
+      GrayImage image = test::renderScene(cam, carpetOnly(6));
+      const test::DrawnBall b = test::drawBall(image, cam, *cam.pixelToGround({in * r, ahead.y()}, 0.05));
+      const test::DrawnBall inside = test::drawBall(image, cam, {d, 0.0});
+      const std::vector<BallProposal> props = {{b.centre_px, b.radius_px, 1}, {inside.centre_px, inside.radius_px, 1}};
+      std::vector<BallDecision> with, without;
+      BallDetector::load(shipped).run(image.view(), cam, props, &with);
+      BallDetector::load(off).run(image.view(), cam, props, &without);
+      EXPECT_GE(with[0].boost_confidence, without[0].boost_confidence) << d << " m, " << in;
+      EXPECT_EQ(with[1].boost_confidence, without[1].boost_confidence) << d << " m, " << in;
+      raised += with[0].boost_confidence > without[0].boost_confidence;
+    }
+  }
+  EXPECT_GT(raised, 0) << "the mirrored look never raised a cut ball's score";
+}
+
 std::string readFile(const std::string& path) {
   std::ifstream in(path);
   std::stringstream ss;
