@@ -128,6 +128,22 @@ GrayImage mirroredAtBorder(const GrayView& image, const cnn::PatchBox& box, cnn:
   return out;
 }
 
+// `net`'s "ball" probability for each of `boxes` mirrored about the image border, in one batch.
+std::vector<float> mirroredBallProbability(const cnn::Classifier& net, const GrayView& image,
+                                           const std::vector<cnn::PatchBox>& boxes) {
+  if (boxes.empty()) return {};
+  const std::size_t count = static_cast<std::size_t>(net.input().size());
+  std::vector<float> inputs(boxes.size() * count), prob(boxes.size() * 2), ball(boxes.size());
+  for (std::size_t m = 0; m < boxes.size(); ++m) {
+    cnn::PatchBox local;
+    const GrayImage part = mirroredAtBorder(image, boxes[m], local);
+    net.extract(part.view(), local, inputs.data() + m * count);
+  }
+  net.run(inputs.data(), static_cast<int>(boxes.size()), prob.data());
+  for (std::size_t m = 0; m < boxes.size(); ++m) ball[m] = prob[2 * m + 1];
+  return ball;
+}
+
 }  // namespace
 
 std::optional<Eigen::Vector2d> smearedBallCentre(const GrayView& image, const Eigen::Vector2d& centre_px,
@@ -210,21 +226,13 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   // and at the patch mirrored about the border (the cut part repeats the border pixel otherwise).
   if (params_.boost_border_mirror) {
     std::vector<std::size_t> cut;
+    std::vector<cnn::PatchBox> cut_boxes;
     for (std::size_t i = 0; i < boxes.size(); ++i) {
-      if (cutByBorder(boxes[i], image)) cut.push_back(i);
+      if (cutByBorder(boxes[i], image)) cut.push_back(i), cut_boxes.push_back(boxes[i]);
     }
-    if (!cut.empty()) {
-      const std::size_t count = static_cast<std::size_t>(boost_net_.input().size());
-      std::vector<float> inputs(cut.size() * count), prob(cut.size() * 2);
-      for (std::size_t m = 0; m < cut.size(); ++m) {
-        cnn::PatchBox local;
-        const GrayImage part = mirroredAtBorder(image, boxes[cut[m]], local);
-        boost_net_.extract(part.view(), local, inputs.data() + m * count);
-      }
-      boost_net_.run(inputs.data(), static_cast<int>(cut.size()), prob.data());
-      for (std::size_t m = 0; m < cut.size(); ++m) {
-        boost_prob[2 * cut[m] + 1] = std::max(boost_prob[2 * cut[m] + 1], prob[2 * m + 1]);
-      }
+    const std::vector<float> mirrored = mirroredBallProbability(boost_net_, image, cut_boxes);
+    for (std::size_t m = 0; m < cut.size(); ++m) {
+      boost_prob[2 * cut[m] + 1] = std::max(boost_prob[2 * cut[m] + 1], mirrored[m]);
     }
   }
   std::vector<int> order(proposals.size());
@@ -328,24 +336,16 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
   std::vector<float> mirrored_conf(kept.size(), -1.0f);
   if (params_.border_mirror_min_confidence <= 1) {
     std::vector<std::size_t> which;
-    std::vector<float> inputs;
-    const std::size_t count = static_cast<std::size_t>(ball_net_.input().size());
+    std::vector<cnn::PatchBox> which_boxes;
     for (std::size_t k = 0; k < kept.size(); ++k) {
-      if (ball_prob[2 * k + 1] >= params_.ball_min_confidence || rescaled_conf[k] >= 0 ||
-          sharpened_conf[k] >= params_.sharpen_min_confidence || !cutByBorder(kept_boxes[k], image)) {
-        continue;
+      if (ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
+          sharpened_conf[k] < params_.sharpen_min_confidence && cutByBorder(kept_boxes[k], image)) {
+        which.push_back(k);
+        which_boxes.push_back(kept_boxes[k]);
       }
-      cnn::PatchBox local;
-      const GrayImage part = mirroredAtBorder(image, kept_boxes[k], local);
-      inputs.resize((which.size() + 1) * count);
-      ball_net_.extract(part.view(), local, inputs.data() + which.size() * count);
-      which.push_back(k);
     }
-    if (!which.empty()) {
-      std::vector<float> prob(which.size() * 2);
-      ball_net_.run(inputs.data(), static_cast<int>(which.size()), prob.data());
-      for (std::size_t m = 0; m < which.size(); ++m) mirrored_conf[which[m]] = prob[2 * m + 1];
-    }
+    const std::vector<float> mirrored = mirroredBallProbability(ball_net_, image, which_boxes);
+    for (std::size_t m = 0; m < which.size(); ++m) mirrored_conf[which[m]] = mirrored[m];
   }
 
   std::vector<BallPercept> out;
