@@ -60,12 +60,19 @@ double centreOutsideRadii(const Eigen::Vector2d& centre_px, double radius_px, in
   return std::hypot(dx, dy) / std::max(radius_px, 1e-9);
 }
 
+namespace {
+
+// Whether `box` reaches beyond the image.
+bool cutByBorder(const cnn::PatchBox& box, const GrayView& image) {
+  return box.x_px < 0 || box.y_px < 0 || box.x_px + box.width_px > image.width ||
+         box.y_px + box.height_px > image.height;
+}
+
+}  // namespace
+
 double patchSmear(const GrayView& image, const cnn::PatchBox& box, Eigen::Vector2d* along) {
   constexpr int side = kSmearPatchSide;
-  if (box.x_px < 0 || box.y_px < 0 || box.x_px + box.width_px > image.width ||
-      box.y_px + box.height_px > image.height) {
-    return -1;
-  }
+  if (cutByBorder(box, image)) return -1;
   std::vector<float> v(static_cast<std::size_t>(side) * side);
   cnn::extractPatch(image, box, side, side, cnn::PatchNormalization::kUnitRange, v.data());
   double xx = 0, xy = 0, yy = 0;
@@ -101,12 +108,6 @@ double grayAt(const GrayView& image, double x, double y) {
   const double top = image.at(x0, y0) + fx * (image.at(x1, y0) - image.at(x0, y0));
   const double bottom = image.at(x0, y1) + fx * (image.at(x1, y1) - image.at(x0, y1));
   return top + fy * (bottom - top);
-}
-
-// Whether `box` reaches beyond the image.
-bool cutByBorder(const cnn::PatchBox& box, const GrayView& image) {
-  return box.x_px < 0 || box.y_px < 0 || box.x_px + box.width_px > image.width ||
-         box.y_px + box.height_px > image.height;
 }
 
 // The pixels under `box` (and one more on every side) with those beyond the image mirrored about

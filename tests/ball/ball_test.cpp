@@ -759,6 +759,15 @@ TEST(BallDetector, SharpenedLookFindsNoBallOnASoftLineCrossingOrFoot) {
   }
 }
 
+// Draws a ball on the row of a ball `d` m ahead, its centre `in_radii` of its radius inside the
+// image's left (or right) border.
+test::DrawnBall drawBallAtBorder(GrayImage& image, const CameraModel& cam, double d, double in_radii, bool left) {
+  const Eigen::Vector2d ahead = *cam.robotToPixel(Eigen::Vector3d(d, 0, 0.05));
+  const double r = *cam.ballRadiusPx(ahead, 0.05);
+  const double x = left ? in_radii * r : cam.intrinsics().width_px - in_radii * r;
+  return test::drawBall(image, cam, *cam.pixelToGround({x, ahead.y()}, 0.05));
+}
+
 // A ball the image's left or right border cuts to some 70 % in view: the patch repeats the border
 // pixel over the cut part and BallNet rejects it; mirrored about the border the visible part
 // completes a ball, which the shipped detector takes. The same look at a foot and at a line crossing
@@ -772,12 +781,9 @@ TEST(BallDetector, MirroredLookFindsABallTheBorderCuts) {
   int rejected_without = 0;
   for (const double d : {0.6, 0.7, 0.8, 1.0}) {
     for (const bool left : {true, false}) {
-      // The ball's centre 0.3 radii inside the border (some 70 % in view), on the row of a ball d ahead.
-      const Eigen::Vector2d ahead = *cam.robotToPixel(Eigen::Vector3d(d, 0, 0.05));
-      const double r = *cam.ballRadiusPx(ahead, 0.05);
-      const Eigen::Vector2d target(left ? 0.3 * r : cam.intrinsics().width_px - 0.3 * r, ahead.y());
+      // The ball's centre 0.3 radii inside the border: some 70 % in view.
       GrayImage image = test::renderScene(cam, carpetOnly(6));
-      const test::DrawnBall b = test::drawBall(image, cam, *cam.pixelToGround(target, 0.05));
+      const test::DrawnBall b = drawBallAtBorder(image, cam, d, 0.3, left);
       const std::vector<BallProposal> props = {{b.centre_px, b.radius_px, 1}};
       std::vector<BallDecision> with, without;
       const auto balls = BallDetector::load(shipped).run(image.view(), cam, props, &with);
@@ -824,10 +830,8 @@ TEST(BallDetector, BoostBallNetTakesTheBetterOfTheCutAndTheMirroredPatch) {
   int raised = 0;
   for (const double d : {0.6, 0.7, 0.8, 1.0}) {
     for (const double in : {0.0, 0.3}) {
-      const Eigen::Vector2d ahead = *cam.robotToPixel(Eigen::Vector3d(d, 0, 0.05));
-      const double r = *cam.ballRadiusPx(ahead, 0.05);
       GrayImage image = test::renderScene(cam, carpetOnly(6));
-      const test::DrawnBall b = test::drawBall(image, cam, *cam.pixelToGround({in * r, ahead.y()}, 0.05));
+      const test::DrawnBall b = drawBallAtBorder(image, cam, d, in, true);
       const test::DrawnBall inside = test::drawBall(image, cam, {d, 0.0});
       const std::vector<BallProposal> props = {{b.centre_px, b.radius_px, 1}, {inside.centre_px, inside.radius_px, 1}};
       std::vector<BallDecision> with, without;
