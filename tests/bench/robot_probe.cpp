@@ -282,7 +282,24 @@ int probe(int argc, char** argv) {
       }
       for (const auto& p : percepts) {
         bool m = false;
-        for (const RobotInImage& r : truth.robots) m = m || robotMatchCost(r, p.box, feetInField(p.feet_px), scoring);
+        double vis = -1;
+        for (const RobotInImage& r : truth.robots) {
+          if (robotMatchCost(r, p.box, feetInField(p.feet_px), scoring)) m = true, vis = r.visible_fraction;
+        }
+        // A percept at least half inside a nearer one (lower feet), a robot behind it or its part (hand,
+        // arm): true or false, the true robot's visible fraction, and its box and feet point in units of
+        // the nearer box (height, feet above its feet, feet across from its left, top below its top, width).
+        for (const auto& q : percepts) {
+          if (&q == &p || q.feet_px.y() <= p.feet_px.y()) continue;
+          const double in = boxInsideFraction(p.box, q.box);
+          if (in < 0.5) continue;
+          const double qh = q.box.height(), qw = q.box.width();
+          std::printf("   NESTED %s vis=%.2f in=%.2f conf=%.3f h_rel=%.2f feet_up=%.2f feet_x=%.2f top_rel=%.2f "
+                      "w_rel=%.2f\n",
+                      m ? "TP" : "FP", vis, in, p.confidence, p.box.height() / qh,
+                      (q.feet_px.y() - p.feet_px.y()) / qh, (p.feet_px.x() - q.box.x0) / qw,
+                      (p.box.y0 - q.box.y0) / qh, p.box.width() / qw);
+        }
         if (!m) {
           ++fps;
           frame_miss = true;
