@@ -39,6 +39,10 @@ BallDetectorParams BallDetectorParams::load(const std::string& path) {
   p.sharpen_amount = f.getInRange("sharpen_amount", 0, 20);
   p.sharpen_min_radius_px = f.getInRange("sharpen_min_radius_px", 0, 1000);
   p.sharpen_min_confidence = f.getInRange("sharpen_min_confidence", 0, 1);
+  p.deblur_iterations = static_cast<int>(f.getInRange("deblur_iterations", 0, 100));
+  p.deblur_min_camera_smear_radii = f.getInRange("deblur_min_camera_smear_radii", 0, 100);
+  p.deblur_min_radius_px = f.getInRange("deblur_min_radius_px", 0, 1000);
+  p.deblur_min_confidence = f.getInRange("deblur_min_confidence", 0, 1);
   p.border_mirror_min_confidence = f.getInRange("border_mirror_min_confidence", 0, 2);
   f.finish();
   return p;
@@ -304,6 +308,14 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
       radius_scale[kept[k]] = s;
     }
   }
+  // BallNet's input patch for `box` in grey levels, not yet normalised (the looks below filter it
+  // first; normalizePatch's kMinStddev is in grey levels).
+  const auto greyPatch = [&](const cnn::PatchBox& box, float* v) {
+    const cnn::Shape& in = ball_net_.input();
+    cnn::extractPatch(image, box, in.width, in.height, cnn::PatchNormalization::kUnitRange, v,
+                      ball_net_.net().resampling());
+    for (int j = 0; j < in.width * in.height; ++j) v[j] *= 255.0f;
+  };
   // Rejected kept patches the rescaled look did not take, through the unsharp mask (a soft lens).
   std::vector<float> sharpened_conf(kept.size(), -1.0f);
   std::vector<std::size_t> sharpened;  // k
@@ -321,15 +333,47 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     std::vector<float> inputs(sharpened.size() * count), prob(sharpened.size() * 2);
     for (std::size_t m = 0; m < sharpened.size(); ++m) {
       float* v = &inputs[m * count];
-      cnn::extractPatch(image, kept_boxes[sharpened[m]], in.width, in.height,
-                        cnn::PatchNormalization::kUnitRange, v, ball_net_.net().resampling());
-      for (int j = 0; j < count; ++j) v[j] *= 255.0f;  // grey levels: kMinStddev is in them
+      greyPatch(kept_boxes[sharpened[m]], v);
       cnn::unsharpMask(v, in.width, in.height, sigma_px, params_.sharpen_amount);
       cnn::normalizePatch(v, count, ball_net_.net().normalization());
     }
     ball_net_.run(inputs.data(), static_cast<int>(sharpened.size()), prob.data());
     for (std::size_t m = 0; m < sharpened.size(); ++m) {
       sharpened_conf[sharpened[m]] = prob[2 * m + 1];
+    }
+  }
+
+  // Rejected kept patches neither of those looks took, where the camera turned during the exposure:
+  // with that smear taken back (BallNet learnt sharp balls).
+  std::vector<float> deblurred_conf(kept.size(), -1.0f);
+  if (params_.deblur_iterations > 0) {
+    std::vector<std::size_t> which;
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      const double radius = proposals[kept[k]].radius_px;
+      if (ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
+          sharpened_conf[k] < params_.sharpen_min_confidence && radius >= params_.deblur_min_radius_px &&
+          camera_smear.norm() >= params_.deblur_min_camera_smear_radii * radius) {
+        which.push_back(k);
+      }
+    }
+    if (!which.empty()) {
+      const cnn::Shape& in = ball_net_.input();
+      const int count = in.width * in.height;
+      std::vector<float> inputs(which.size() * count), prob(which.size() * 2);
+      for (std::size_t m = 0; m < which.size(); ++m) {
+        const cnn::PatchBox& box = kept_boxes[which[m]];
+        float* v = &inputs[m * count];
+        greyPatch(box, v);
+        // The smear in patch pixels (a longer one than the patch: the patch is all smear).
+        const Eigen::Vector2d s(camera_smear.x() * in.width / box.width_px,
+                                camera_smear.y() * in.height / box.height_px);
+        const double most = 0.9 * std::min(in.width, in.height);
+        const Eigen::Vector2d d = s.norm() > most ? Eigen::Vector2d(s * (most / s.norm())) : s;
+        cnn::deblurAlong(v, in.width, in.height, d.x(), d.y(), params_.deblur_iterations);
+        cnn::normalizePatch(v, count, ball_net_.net().normalization());
+      }
+      ball_net_.run(inputs.data(), static_cast<int>(which.size()), prob.data());
+      for (std::size_t m = 0; m < which.size(); ++m) deblurred_conf[which[m]] = prob[2 * m + 1];
     }
   }
 
@@ -340,7 +384,8 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     std::vector<cnn::PatchBox> which_boxes;
     for (std::size_t k = 0; k < kept.size(); ++k) {
       if (ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
-          sharpened_conf[k] < params_.sharpen_min_confidence && cutByBorder(kept_boxes[k], image)) {
+          sharpened_conf[k] < params_.sharpen_min_confidence &&
+          deblurred_conf[k] < params_.deblur_min_confidence && cutByBorder(kept_boxes[k], image)) {
         which.push_back(k);
         which_boxes.push_back(kept_boxes[k]);
       }
@@ -370,16 +415,20 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
       hits.emplace_back(rescaled_conf[k], i);
     } else if (sharpened_conf[k] >= params_.sharpen_min_confidence) {
       hits.emplace_back(sharpened_conf[k], i);
+    } else if (deblurred_conf[k] >= params_.deblur_min_confidence) {
+      hits.emplace_back(deblurred_conf[k], i);
     } else if (mirrored_conf[k] >= params_.border_mirror_min_confidence) {
       hits.emplace_back(mirrored_conf[k], i);
     }
     all[i].sharpened_confidence = sharpened_conf[k];
+    all[i].deblurred_confidence = deblurred_conf[k];
     all[i].mirrored_confidence = mirrored_conf[k];
     // (SmearedBallNet's answer counts for a patch neither other look took: one hit per proposal.)
     if (smeared[k]) {
       all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];
       if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence &&
-          rescaled_conf[k] < 0 && sharpened_conf[k] < params_.sharpen_min_confidence) {
+          rescaled_conf[k] < 0 && sharpened_conf[k] < params_.sharpen_min_confidence &&
+          deblurred_conf[k] < params_.deblur_min_confidence) {
         hits.emplace_back(all[i].smeared_confidence, i);
         smeared_centre[i] = smearedBallCentre(image, proposals[i].centre_px, proposals[i].radius_px, along[k],
                                               params_.smeared_centre_reach_radii,

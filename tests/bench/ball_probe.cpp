@@ -66,6 +66,10 @@ int probe(int argc, char** argv) {
   if (const char* b = std::getenv("BP_BOOSTMIN")) config.ball_detector.boost_min_confidence = std::atof(b);
   if (const char* b = std::getenv("BP_BOOSTMIRROR")) config.ball_detector.boost_border_mirror = std::atoi(b);
   env("BP_SMEAR", config.ball_detector.smeared_min_coherence);
+  if (const char* b = std::getenv("BP_DEBLUR")) config.ball_detector.deblur_iterations = std::atoi(b);
+  env("BP_DEBLURSMEAR", config.ball_detector.deblur_min_camera_smear_radii);
+  env("BP_DEBLURR", config.ball_detector.deblur_min_radius_px);
+  env("BP_DEBLURCONF", config.ball_detector.deblur_min_confidence);
   env("BP_CAMSMEAR", config.ball_detector.smeared_min_camera_smear_radii);
   env("BP_SMEARDIR", config.ball_detector.smeared_max_direction_deg);
   env("BP_PATCHD", config.ball_detector.patch_diameters);
@@ -140,6 +144,7 @@ int probe(int argc, char** argv) {
                       d.smeared_confidence, cam.norm() / p.radius_px, angle);
         }
         if (d.sharpened_confidence >= 0) std::printf(" sharp=%.3f", d.sharpened_confidence);
+        if (d.deblurred_confidence >= 0) std::printf(" deblur=%.3f", d.deblurred_confidence);
         if (d.mirrored_confidence >= 0) std::printf(" mirror=%.3f", d.mirrored_confidence);
         std::printf("\n");
         // Every bit of the proposal (a speedup must leave them as they were).

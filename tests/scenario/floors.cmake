@@ -58,3 +58,10 @@ colorfree_floor_test(robot_hard_feet_floor ball_hard_feet.yaml 8
 colorfree_floor_test(defocus_floor sweeps/lens_defocus.yaml 4
   "ball.detection_rate >= 0.70" "ball.false_positives_per_frame <= 0.05"
   "robot.detection_rate >= 0.90" "robot.false_positives_per_frame <= 0.05")
+
+# Ball behind a soft lens with the head sweeping (ball_hard_soft: 6 cases x 8 frames, 48 balls).
+# Measured: detection 1.000, no false positive, proposal recall 1.000 (session 37: the deblurred
+# look, BallNet on the patch with the camera's smear taken back; without it detection 0.875, the six
+# balls of frame 4 lost). One miss is the margin.
+colorfree_floor_test(ball_soft_floor ball_hard_soft.yaml 8
+  "ball.detection_rate >= 0.97" "ball.false_positives_per_frame <= 0.03")

@@ -119,6 +119,76 @@ void unsharpMask(float* values, int width, int height, double sigma_px, double a
   for (std::size_t i = 0; i < blurred.size(); ++i) values[i] += a * (values[i] - blurred[i]);
 }
 
+void deblurAlong(float* values, int width, int height, double dx_px, double dy_px, int iterations) {
+  if (width <= 0 || height <= 0 || width > kMaxPatchSide || height > kMaxPatchSide) {
+    throw Error("deblurAlong: patch size " + std::to_string(width) + "x" + std::to_string(height) +
+                " outside 1..256");
+  }
+  const double length = std::hypot(dx_px, dy_px);
+  if (iterations < 0 || !(length <= std::max(width, height))) {
+    throw Error("deblurAlong: " + std::to_string(iterations) + " iterations and a smear of " +
+                std::to_string(length) + " px on a " + std::to_string(width) + "x" +
+                std::to_string(height) + " patch (need iterations >= 0, a smear within the patch)");
+  }
+  if (iterations == 0 || length < 1) return;
+  // The blur as a small kernel of whole-pixel offsets: the mean of taps one pixel or less apart
+  // along the segment, each read bilinearly (its four neighbours' weights the same at every pixel).
+  const int taps = static_cast<int>(std::ceil(length)) + 1;
+  std::vector<std::pair<std::pair<int, int>, float>> kernel;  // ((dx, dy), weight)
+  for (int k = 0; k < taps; ++k) {
+    const double t = static_cast<double>(k) / (taps - 1) - 0.5;
+    const double x = t * dx_px, y = t * dy_px;
+    const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+    const double fx = x - x0, fy = y - y0;
+    const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    const int ox[4] = {x0, x0 + 1, x0, x0 + 1}, oy[4] = {y0, y0, y0 + 1, y0 + 1};
+    for (int c = 0; c < 4; ++c) {
+      if (w[c] <= 0) continue;
+      auto it = std::find_if(kernel.begin(), kernel.end(),
+                             [&](const auto& e) { return e.first == std::make_pair(ox[c], oy[c]); });
+      if (it == kernel.end()) {
+        kernel.push_back({{ox[c], oy[c]}, 0.0f});
+        it = kernel.end() - 1;
+      }
+      it->second += static_cast<float>(w[c] / taps);
+    }
+  }
+  // Each blur reads a copy with `pad` pixels of repeated border round it (no bounds in the loop).
+  int pad = 0;
+  for (const auto& e : kernel) pad = std::max({pad, std::abs(e.first.first), std::abs(e.first.second)});
+  const int pw = width + 2 * pad;
+  const std::size_t n = static_cast<std::size_t>(width) * height;
+  std::vector<float> padded(static_cast<std::size_t>(pw) * (height + 2 * pad));
+  // (the segment is symmetric about its middle: the blur is its own adjoint, up to the sampling)
+  const auto blur = [&](const std::vector<float>& in, std::vector<float>& out) {
+    for (int y = -pad; y < height + pad; ++y) {
+      const float* src = &in[static_cast<std::size_t>(std::clamp(y, 0, height - 1)) * width];
+      float* dst = &padded[static_cast<std::size_t>(y + pad) * pw];
+      for (int x = -pad; x < width + pad; ++x) dst[x + pad] = src[std::clamp(x, 0, width - 1)];
+    }
+    std::fill(out.begin(), out.end(), 0.0f);
+    for (const auto& [d, w] : kernel) {
+      for (int y = 0; y < height; ++y) {
+        const float* src = &padded[static_cast<std::size_t>(y + pad + d.second) * pw + pad + d.first];
+        float* dst = &out[static_cast<std::size_t>(y) * width];
+        for (int x = 0; x < width; ++x) dst[x] += w * src[x];
+      }
+    }
+  };
+  // Grey levels kept away from 0 (the ratio's denominator); the floor taken off at the end.
+  constexpr float kFloor = 1.0f;
+  std::vector<float> observed(values, values + n), estimate(n), blurred(n), ratio(n), back(n);
+  for (float& v : observed) v = std::max(v, 0.0f) + kFloor;
+  estimate = observed;
+  for (int it = 0; it < iterations; ++it) {
+    blur(estimate, blurred);
+    for (std::size_t i = 0; i < n; ++i) ratio[i] = observed[i] / std::max(blurred[i], 1e-3f);
+    blur(ratio, back);
+    for (std::size_t i = 0; i < n; ++i) estimate[i] *= back[i];
+  }
+  for (std::size_t i = 0; i < n; ++i) values[i] = estimate[i] - kFloor;
+}
+
 namespace {
 
 // The pixels one axis's samples average: sample k reads the source pixels start[k] ..

@@ -63,6 +63,14 @@ struct BallDetectorParams {
   /// input, blurred by the resampling rather than the lens, and sharpening it makes up prints ...
   double sharpen_min_radius_px = 10;
   double sharpen_min_confidence = 0.99;  ///< ... and is detected from this BallNet score there.
+  /// A kept patch BallNet rejects (and neither the rescaled nor the sharpened look took), where the
+  /// camera's own turn smeared the frame by at least deblur_min_camera_smear_radii × the radius
+  /// (`CameraModel::exposureSmearPx`), gets a look with that smear taken back (`cnn::deblurAlong`,
+  /// this many Richardson–Lucy steps; 0: no such look) ...
+  int deblur_iterations = 10;
+  double deblur_min_camera_smear_radii = 0.5;
+  double deblur_min_radius_px = 10;      ///< ... for proposals of at least this radius ...
+  double deblur_min_confidence = 0.9;    ///< ... and is detected from this BallNet score there.
   /// A kept patch BallNet rejects (and no other look took) that the image border cuts gets a look
   /// with the part beyond the border mirrored about it (the ball's visible part completing it, where
   /// the patch otherwise repeats the border pixel), detected from this BallNet score (above 1: never).
@@ -112,6 +120,8 @@ struct BallDecision {
   float smeared_confidence = -1;   ///< SmearedBallNet's "ball" probability; -1 when it did not run
   /// BallNet's "ball" probability on the sharpened patch; -1 when it did not look
   float sharpened_confidence = -1;
+  /// BallNet's "ball" probability on the patch with the camera's smear taken back; -1 when it did not look
+  float deblurred_confidence = -1;
   /// BallNet's "ball" probability on the patch mirrored at the image border; -1 when it did not look
   float mirrored_confidence = -1;
   bool detected = false;
@@ -122,7 +132,8 @@ struct BallDecision {
 /// (`smeared_min_coherence`) gets a second look by SmearedBallNet (BallNet's shape, trained on such
 /// patches only), and BallNet looks again at it framed larger and smaller (rescale_*: the camera
 /// pose the expected radius came from may be off) and, if neither framing takes, sharpened
-/// (sharpen_*: a soft lens), and, cut by the image border, mirrored about it (border_mirror_*;
+/// (sharpen_*: a soft lens), and, if the camera turned, with its smear taken back (deblur_*), and,
+/// cut by the image border, mirrored about it (border_mirror_*;
 /// BoostBallNet scores such a proposal by the better of both looks too).
 /// Nets read from perception/models by default.
 class BallDetector {

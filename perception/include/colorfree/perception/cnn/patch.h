@@ -50,4 +50,13 @@ void normalizePatch(float* values, int count, PatchNormalization normalization);
 /// empty or oversized patch, sigma_px <= 0 or amount < 0.
 void unsharpMask(float* values, int width, int height, double sigma_px, double amount);
 
+/// Richardson–Lucy deconvolution in place on a width × height patch of grey values (rows top-down,
+/// 0..255) blurred by a straight motion: the mean of the sharp patch over the segment from −(dx, dy)/2
+/// to +(dx, dy)/2 (patch pixels; a camera turning during the exposure). `iterations` steps
+/// x ← x · Bᵀ(observed / B x), B that blur (bilinear, the border repeated): the smear's length is
+/// taken back in part, the more the more steps, noise rising with them. A segment shorter than a
+/// pixel, or 0 iterations, leaves the patch as it is. Throws colorfree::Error for an empty or
+/// oversized patch, a negative iteration count or a segment longer than the patch.
+void deblurAlong(float* values, int width, int height, double dx_px, double dy_px, int iterations);
+
 }  // namespace colorfree::cnn
