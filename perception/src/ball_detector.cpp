@@ -316,12 +316,17 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
                       ball_net_.net().resampling());
     for (int j = 0; j < in.width * in.height; ++j) v[j] *= 255.0f;
   };
+  // The later looks' scores (-1: not looked), and whether BallNet rejected kept patch k and no look
+  // so far took it (a look not taken yet reads -1, under its bar).
+  std::vector<float> sharpened_conf(kept.size(), -1.0f), deblurred_conf(kept.size(), -1.0f);
+  const auto untaken = [&](std::size_t k) {
+    return ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
+           sharpened_conf[k] < params_.sharpen_min_confidence && deblurred_conf[k] < params_.deblur_min_confidence;
+  };
   // Rejected kept patches the rescaled look did not take, through the unsharp mask (a soft lens).
-  std::vector<float> sharpened_conf(kept.size(), -1.0f);
   std::vector<std::size_t> sharpened;  // k
   for (std::size_t k = 0; k < kept.size() && params_.sharpen_sigma_radii > 0; ++k) {
-    if (ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
-        proposals[kept[k]].radius_px >= params_.sharpen_min_radius_px) {
+    if (untaken(k) && proposals[kept[k]].radius_px >= params_.sharpen_min_radius_px) {
       sharpened.push_back(k);
     }
   }
@@ -345,13 +350,11 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
 
   // Rejected kept patches neither of those looks took, where the camera turned during the exposure:
   // with that smear taken back (BallNet learnt sharp balls).
-  std::vector<float> deblurred_conf(kept.size(), -1.0f);
   if (params_.deblur_iterations > 0) {
     std::vector<std::size_t> which;
     for (std::size_t k = 0; k < kept.size(); ++k) {
       const double radius = proposals[kept[k]].radius_px;
-      if (ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
-          sharpened_conf[k] < params_.sharpen_min_confidence && radius >= params_.deblur_min_radius_px &&
+      if (untaken(k) && radius >= params_.deblur_min_radius_px &&
           camera_smear.norm() >= params_.deblur_min_camera_smear_radii * radius) {
         which.push_back(k);
       }
@@ -383,9 +386,7 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     std::vector<std::size_t> which;
     std::vector<cnn::PatchBox> which_boxes;
     for (std::size_t k = 0; k < kept.size(); ++k) {
-      if (ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
-          sharpened_conf[k] < params_.sharpen_min_confidence &&
-          deblurred_conf[k] < params_.deblur_min_confidence && cutByBorder(kept_boxes[k], image)) {
+      if (untaken(k) && cutByBorder(kept_boxes[k], image)) {
         which.push_back(k);
         which_boxes.push_back(kept_boxes[k]);
       }
@@ -426,9 +427,8 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     // (SmearedBallNet's answer counts for a patch neither other look took: one hit per proposal.)
     if (smeared[k]) {
       all[i].smeared_confidence = smeared_prob[2 * next_smeared++ + 1];
-      if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence &&
-          rescaled_conf[k] < 0 && sharpened_conf[k] < params_.sharpen_min_confidence &&
-          deblurred_conf[k] < params_.deblur_min_confidence) {
+      // (routed only where BallNet rejected)
+      if (all[i].smeared_confidence >= params_.smeared_ball_min_confidence && untaken(k)) {
         hits.emplace_back(all[i].smeared_confidence, i);
         smeared_centre[i] = smearedBallCentre(image, proposals[i].centre_px, proposals[i].radius_px, along[k],
                                               params_.smeared_centre_reach_radii,
