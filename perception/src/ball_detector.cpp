@@ -308,14 +308,6 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
       radius_scale[kept[k]] = s;
     }
   }
-  // BallNet's input patch for `box` in grey levels, not yet normalised (the looks below filter it
-  // first; normalizePatch's kMinStddev is in grey levels).
-  const auto greyPatch = [&](const cnn::PatchBox& box, float* v) {
-    const cnn::Shape& in = ball_net_.input();
-    cnn::extractPatch(image, box, in.width, in.height, cnn::PatchNormalization::kUnitRange, v,
-                      ball_net_.net().resampling());
-    for (int j = 0; j < in.width * in.height; ++j) v[j] *= 255.0f;
-  };
   // The later looks' scores (-1: not looked), and whether BallNet rejected kept patch k and no look
   // so far took it (a look not taken yet reads -1, under its bar).
   std::vector<float> sharpened_conf(kept.size(), -1.0f), deblurred_conf(kept.size(), -1.0f);
@@ -323,29 +315,38 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
     return ball_prob[2 * k + 1] < params_.ball_min_confidence && rescaled_conf[k] < 0 &&
            sharpened_conf[k] < params_.sharpen_min_confidence && deblurred_conf[k] < params_.deblur_min_confidence;
   };
-  // Rejected kept patches the rescaled look did not take, through the unsharp mask (a soft lens).
-  std::vector<std::size_t> sharpened;  // k
-  for (std::size_t k = 0; k < kept.size() && params_.sharpen_sigma_radii > 0; ++k) {
-    if (untaken(k) && proposals[kept[k]].radius_px >= params_.sharpen_min_radius_px) {
-      sharpened.push_back(k);
-    }
-  }
-  if (!sharpened.empty()) {
-    const cnn::Shape& in = ball_net_.input();
-    const int count = in.width * in.height;
-    // The ball's radius in patch pixels: the patch is patch_diameters ball diameters wide.
-    const double sigma_px = params_.sharpen_sigma_radii * in.width / (2 * params_.patch_diameters);
-    std::vector<float> inputs(sharpened.size() * count), prob(sharpened.size() * 2);
-    for (std::size_t m = 0; m < sharpened.size(); ++m) {
+  // BallNet on kept patches `which`, each extracted in grey levels and passed through
+  // `filter(box, values)` before it is normalised (normalizePatch's kMinStddev is in grey levels):
+  // their ball scores into `conf`.
+  const cnn::Shape& in = ball_net_.input();
+  const int count = in.width * in.height;
+  const auto filteredLook = [&](const std::vector<std::size_t>& which, const auto& filter,
+                                std::vector<float>& conf) {
+    if (which.empty()) return;
+    std::vector<float> inputs(which.size() * count), prob(which.size() * 2);
+    for (std::size_t m = 0; m < which.size(); ++m) {
+      const cnn::PatchBox& box = kept_boxes[which[m]];
       float* v = &inputs[m * count];
-      greyPatch(kept_boxes[sharpened[m]], v);
-      cnn::unsharpMask(v, in.width, in.height, sigma_px, params_.sharpen_amount);
+      cnn::extractPatch(image, box, in.width, in.height, cnn::PatchNormalization::kUnitRange, v,
+                        ball_net_.net().resampling());
+      for (int j = 0; j < count; ++j) v[j] *= 255.0f;
+      filter(box, v);
       cnn::normalizePatch(v, count, ball_net_.net().normalization());
     }
-    ball_net_.run(inputs.data(), static_cast<int>(sharpened.size()), prob.data());
-    for (std::size_t m = 0; m < sharpened.size(); ++m) {
-      sharpened_conf[sharpened[m]] = prob[2 * m + 1];
+    ball_net_.run(inputs.data(), static_cast<int>(which.size()), prob.data());
+    for (std::size_t m = 0; m < which.size(); ++m) conf[which[m]] = prob[2 * m + 1];
+  };
+  // Rejected kept patches the rescaled look did not take, through the unsharp mask (a soft lens).
+  if (params_.sharpen_sigma_radii > 0) {
+    std::vector<std::size_t> which;
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      if (untaken(k) && proposals[kept[k]].radius_px >= params_.sharpen_min_radius_px) which.push_back(k);
     }
+    // The ball's radius in patch pixels: the patch is patch_diameters ball diameters wide.
+    const double sigma_px = params_.sharpen_sigma_radii * in.width / (2 * params_.patch_diameters);
+    filteredLook(which, [&](const cnn::PatchBox&, float* v) {
+      cnn::unsharpMask(v, in.width, in.height, sigma_px, params_.sharpen_amount);
+    }, sharpened_conf);
   }
 
   // Rejected kept patches neither of those looks took, where the camera turned during the exposure:
@@ -359,25 +360,14 @@ std::vector<BallPercept> BallDetector::run(const GrayView& image, const CameraMo
         which.push_back(k);
       }
     }
-    if (!which.empty()) {
-      const cnn::Shape& in = ball_net_.input();
-      const int count = in.width * in.height;
-      std::vector<float> inputs(which.size() * count), prob(which.size() * 2);
-      for (std::size_t m = 0; m < which.size(); ++m) {
-        const cnn::PatchBox& box = kept_boxes[which[m]];
-        float* v = &inputs[m * count];
-        greyPatch(box, v);
-        // The smear in patch pixels (a longer one than the patch: the patch is all smear).
-        const Eigen::Vector2d s(camera_smear.x() * in.width / box.width_px,
-                                camera_smear.y() * in.height / box.height_px);
-        const double most = 0.9 * std::min(in.width, in.height);
-        const Eigen::Vector2d d = s.norm() > most ? Eigen::Vector2d(s * (most / s.norm())) : s;
-        cnn::deblurAlong(v, in.width, in.height, d.x(), d.y(), params_.deblur_iterations);
-        cnn::normalizePatch(v, count, ball_net_.net().normalization());
-      }
-      ball_net_.run(inputs.data(), static_cast<int>(which.size()), prob.data());
-      for (std::size_t m = 0; m < which.size(); ++m) deblurred_conf[which[m]] = prob[2 * m + 1];
-    }
+    filteredLook(which, [&](const cnn::PatchBox& box, float* v) {
+      // The smear in patch pixels (a longer one than the patch: the patch is all smear).
+      const Eigen::Vector2d s(camera_smear.x() * in.width / box.width_px,
+                              camera_smear.y() * in.height / box.height_px);
+      const double most = 0.9 * std::min(in.width, in.height);
+      const Eigen::Vector2d d = s.norm() > most ? Eigen::Vector2d(s * (most / s.norm())) : s;
+      cnn::deblurAlong(v, in.width, in.height, d.x(), d.y(), params_.deblur_iterations);
+    }, deblurred_conf);
   }
 
   // Rejected kept patches the image border cuts that no other look took, mirrored at the border.
