@@ -36,6 +36,10 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.dark_panel_max_height_fraction = f.getInRange("dark_panel_max_height_fraction", 0, 1);
   p.dark_panel_min_chain_share = f.getInRange("dark_panel_min_chain_share", 0, 1);
   p.dark_panel_below_feet_fraction = f.getInRange("dark_panel_below_feet_fraction", 0, 1);
+  p.dark_panel_edge_min_rows = static_cast<int>(f.getInRange("dark_panel_edge_min_rows", 1, 8));
+  if (p.dark_panel_edge_min_rows > p.silhouette_min_rows) {
+    throw Error(path + ": dark_panel_edge_min_rows must not exceed silhouette_min_rows");
+  }
   p.vote_distance_m = f.getInRange("vote_distance_m", 0.0001, 1);
   p.vote_margin_m = f.getInRange("vote_margin_m", 0, 2);
   p.second_line_min_length_m = f.getInRange("second_line_min_length_m", 0, 2);
@@ -541,9 +545,16 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
       packBits(out_row.data(), w, &majority[static_cast<std::size_t>(r) * words]);
     }
   }
-  // Scanning a line bottom-up, an edge is where the run of majority rows reaches m: rows r .. r+m-1
-  // on and the row below them off (or not scanned). All scan lines together, row by row, 64
-  // columns a word.
+  // A heel's dark panel below an edge (its upper edge): points move below it, and its thin rim
+  // answers on fewer rows.
+  const DarkPanel panel{p.dark_panel_max_gray_ratio * carpet_gray,
+                        static_cast<int>(std::ceil(p.dark_panel_min_height_fraction * h)),
+                        static_cast<int>(p.dark_panel_max_height_fraction * h),
+                        static_cast<int>(robot.feet_px.y() + p.dark_panel_below_feet_fraction * h)};
+  const int panel_m = p.dark_panel_max_gray_ratio > 0 ? p.dark_panel_edge_min_rows : m;
+  // Scanning a line bottom-up, an edge is the lowest row r of a run of majority rows (row r + 1
+  // off or not scanned) at least m rows long (rows r-m+1 .. r on), or panel_m rows long with a
+  // dark panel right below it. All scan lines together, row by row, 64 columns a word.
   std::vector<int> found(columns, 0);
   std::vector<Hit> column_hits(static_cast<std::size_t>(columns) * kMaxHits);
   // The scan line of each mask column, -1 where none is.
@@ -555,27 +566,45 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     if (column_of[x] >= 0) open_bits[x / 64] |= std::uint64_t{1} << (x % 64);
   }
   int open = columns;
-  std::array<const std::uint8_t*, 16> above{};
-  for (int r = edges.height - 1 - m; r >= 1 && open > 0; --r) {
-    const std::uint64_t* below = &majority[static_cast<std::size_t>(r + m) * words];
-    const std::uint64_t* first = &majority[static_cast<std::size_t>(r) * words];
-    const int y = edges.y0 + r;
-    // The rows the edge test averages (those inside the image) and the least passing sum.
-    const int n_above = min_above_gray > 0 ? std::min(above_rows, y) : 0;
-    for (int i = 0; i < n_above; ++i) above[i] = image.row(y - 1 - i);
-    const int min_sum = min_above_gray > 0 ? min_above_sum[n_above] : 0;
+  const auto mask_row = [&](int r) { return &majority[static_cast<std::size_t>(r) * words]; };
+  // The rows above a run's top whose mean the edge test takes, and the least passing sum there.
+  struct AboveTest {
+    int n = 0, min_sum = 0;
+  };
+  const auto aboveTest = [&](int top_y) {
+    AboveTest t;
+    t.n = min_above_gray > 0 ? std::min(above_rows, top_y) : 0;
+    t.min_sum = min_above_gray > 0 ? min_above_sum[t.n] : 0;
+    return t;
+  };
+  for (int r = edges.height - 2; r >= panel_m && open > 0; --r) {
+    const std::uint64_t* below = mask_row(r + 1);
+    const int y = edges.y0 + r;  // the edge's row (the run's lowest)
+    const bool long_possible = r >= m;
+    // A panel starts below the edge and ends at most at its last row, at least min_rows on.
+    const bool short_possible = panel_m < m && y + panel.min_rows <= panel.max_end_row;
+    const AboveTest long_test = aboveTest(y - m + 1), short_test = aboveTest(y - panel_m + 1);
     for (int k = 0; k < words; ++k) {
-      std::uint64_t start = ~below[k];
-      for (int j = 0; j < m; ++j) start &= first[static_cast<std::size_t>(j) * words + k];
-      // Without branches on the data: a start that fails the test writes its hit where the
-      // column's next one goes, and the count does not move.
-      for (start &= open_bits[k]; start != 0; start &= start - 1) {
+      std::uint64_t lowest = ~below[k] & open_bits[k];
+      std::uint64_t short_run = lowest;
+      for (int j = 0; j < panel_m; ++j) short_run &= mask_row(r - j)[k];
+      if (short_run == 0) continue;
+      std::uint64_t long_run = long_possible ? short_run : 0;
+      for (int j = panel_m; j < m && long_run != 0; ++j) long_run &= mask_row(r - j)[k];
+      short_run = short_possible ? short_run & ~long_run : 0;
+      for (std::uint64_t start = short_run | long_run; start != 0; start &= start - 1) {
         const int bit = __builtin_ctzll(start);
         const int c = column_of[64 * k + bit];
+        const bool is_long = (long_run >> bit) & 1;
+        if (!is_long && belowDarkPanel(image, scan_x[c], y, panel) == y) continue;
+        const AboveTest& t = is_long ? long_test : short_test;
+        const int top_y = is_long ? y - m + 1 : y - panel_m + 1;
         int sum = 0;
-        for (int i = 0; i < n_above; ++i) sum += above[i][scan_x[c]];
-        column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y + m - 1};
-        found[c] += static_cast<int>(sum >= min_sum);
+        for (int i = 0; i < t.n; ++i) sum += image.row(top_y - 1 - i)[scan_x[c]];
+        // A start that fails the test writes its hit where the column's next one goes, and the
+        // count does not move.
+        column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y};
+        found[c] += static_cast<int>(sum >= t.min_sum);
         const bool full = found[c] == kMaxHits;
         open_bits[k] &= ~(static_cast<std::uint64_t>(full) << bit);
         open -= static_cast<int>(full);
@@ -614,10 +643,6 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
                                             p.silhouette_min_chain_fraction * robot.box.width() / p.scan_step_px);
   // Per scan line, the lowest hit on a long chain is the lower silhouette (below a dark panel:
   // its lower end).
-  const DarkPanel panel{p.dark_panel_max_gray_ratio * carpet_gray,
-                        static_cast<int>(std::ceil(p.dark_panel_min_height_fraction * h)),
-                        static_cast<int>(p.dark_panel_max_height_fraction * h),
-                        static_cast<int>(robot.feet_px.y() + p.dark_panel_below_feet_fraction * h)};
   // Per scan line its hit, and the row below a panel there (-1: none); a chain's points move
   // below panels only where most of its points have one (a heel's edge does; a cast shadow's
   // slanted edge gives a short dark stretch on a few scan lines).

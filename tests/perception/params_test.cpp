@@ -15,6 +15,7 @@
 #include "colorfree/perception/pipeline.h"
 #include "colorfree/perception/pose_fit.h"
 #include "colorfree/perception/robot_detector.h"
+#include "colorfree/perception/robot_orientation.h"
 #include "colorfree/perception/robot_proposer.h"
 
 namespace colorfree {
@@ -137,6 +138,11 @@ TEST(StageParams, ImpossibleCombinationsAreErrors) {
   expectErrorNaming([](const std::string& f) { RobotDetectorParams::load(f); }, mirror,
                     "mirror_min_confidence",
                     "a mirrored look's band with its lower bound above its upper");
+  const std::string orientation = readFile(defaultParamDir() + "/robot_orientation.yaml");
+  const std::string panel_rows =
+      writeTemp("panel_rows.yaml", withValue(orientation, "dark_panel_edge_min_rows", "3"));
+  expectErrorNaming([](const std::string& f) { RobotOrientationParams::load(f); }, panel_rows,
+                    "dark_panel_edge_min_rows", "a panel edge asking more rows than any other edge");
 }
 
 TEST(StageParams, AnEvenSmoothingWidthIsAnError) {

@@ -73,6 +73,9 @@ struct RobotOrientationParams {
   double dark_panel_max_height_fraction = 0.1;
   double dark_panel_below_feet_fraction = 0.03;
   double dark_panel_min_chain_share = 0.7;
+  /// An edge with such a panel right below it needs only this many rows above the threshold (at
+  /// most silhouette_min_rows): a heel's thin white rim over the panel answers on one.
+  int dark_panel_edge_min_rows = 1;
   double vote_distance_m = 0.012;            ///< line voting: a point this close to the line votes ...
   double vote_margin_m = 0.3;                ///< ... when it projects within this of the hull edge's ends
   double second_line_min_length_m = 0.04;
