@@ -99,7 +99,7 @@ BenchPlan loadBenchPlan(const std::string& list_path, bool quick) {
   hash = fnv1a(codeVersion(), hash);
   if (root["targets"]) {
     checkKeys(root["targets"], {"ball.detection_rate", "robot.detection_rate", "field_features.line_detection_rate",
-                                "field_features.intersection_detection_rate"},
+                                "field_features.intersection_detection_rate", "orientation.filtered.perceived"},
               list_path, "targets.");
     for (const auto& kv : root["targets"]) {
       const std::string key = kv.first.as<std::string>();
@@ -159,6 +159,7 @@ BenchPlan loadBenchPlan(const std::string& list_path, bool quick) {
       throw Error(where(list_path, e, prefix + "role") + ": a sweep experiment needs a scenario with `sweep:` (" +
                   x.scenario_path + ")");
     }
+    if (x.role == ExperimentRole::kSweep) x.swept_setting = s.sweep.front().path;
     plan.experiments.push_back(x);
   }
   plan.fingerprint = hash;
@@ -183,6 +184,7 @@ nlohmann::json BenchPlan::toJson() const {
                                 {"frames_per_case", e.frames_per_case},
                                 {"cases", e.cases},
                                 {"orientation_tolerance_deg", e.orientation_tolerance_deg},
+                                {"swept_setting", e.swept_setting},
                                 {"expectations", e.expectations},
                                 {"case_costs", e.case_costs}});
   }
@@ -208,6 +210,7 @@ BenchPlan BenchPlan::fromJson(const nlohmann::json& j) {
       x.frames_per_case = e.at("frames_per_case").get<int>();
       x.cases = e.at("cases").get<int>();
       x.orientation_tolerance_deg = e.at("orientation_tolerance_deg").get<double>();
+      x.swept_setting = e.at("swept_setting").get<std::string>();
       x.expectations = e.at("expectations").get<std::vector<std::string>>();
       x.case_costs = e.at("case_costs").get<std::vector<double>>();
       p.experiments.push_back(x);

@@ -23,6 +23,9 @@ struct BenchExperiment {
   int frames_per_case = 0;  ///< after the list's frames / quick_frames override
   int cases = 0;
   double orientation_tolerance_deg = 22.5;
+  /// A sweep's charted setting: its scenario's first `sweep:` path (the others are averaged over,
+  /// e.g. the headings of an orientation sweep); empty for other roles.
+  std::string swept_setting;
   std::vector<std::string> expectations;  ///< the scenario's `expect:` texts
   std::vector<double> case_costs;         ///< relative render cost per case (for balancing)
 };

@@ -26,7 +26,9 @@ const std::map<std::string, std::string> kStageTitles = {
     {"robot_orientation", "Robot orientation"}, {"ball_proposals", "Ball proposals"},
     {"ball_detector", "Ball detector"}, {"ignore_regions", "Ignore regions"}};
 
-// The detectors charted against each swept setting: results.json counts (detected, truths) per case.
+// The rates charted against each swept setting: a detector's from its results.json counts per case
+// (`section.counts.detected` of `section.counts.truths`, shown when `section.counts.ran` > 0), or,
+// with `detected` empty, the filtered orientation's perceived share of the cases' robot-frames.
 struct SweptRate {
   std::string metric, label, section, detected, truths, ran;
 };
@@ -36,7 +38,8 @@ const std::vector<SweptRate> kSweptRates = {
     {"field_features.line_detection_rate", "field lines", "field_features", "lines_detected", "lines_in_view",
      "frames"},
     {"field_features.intersection_detection_rate", "L/T/X", "field_features", "intersections_detected",
-     "intersections_in_view", "frames"}};
+     "intersections_in_view", "frames"},
+    {"orientation.filtered.perceived", "orientation", "orientation", "", "", ""}};
 
 // Per value of a sweep, beside the rates (not charted: not rates): summary key, label, decimals.
 struct SweptExtra {
@@ -44,7 +47,8 @@ struct SweptExtra {
   const char* label;
   int decimals;
 };
-const std::vector<SweptExtra> kSweptExtras = {{"robot_false_positives_per_frame", "robot FP/f", 2},
+const std::vector<SweptExtra> kSweptExtras = {{"orientation_false_positive", "ori false", 2},
+                                              {"robot_false_positives_per_frame", "robot FP/f", 2},
                                               {"robot_position_error_m", "robot err m", 3},
                                               {"ball_position_error_m", "ball err m", 3}};
 
@@ -60,6 +64,17 @@ const json& at(const json& j, const std::string& path) {
     if (dot == std::string::npos) return *n;
     start = dot + 1;
   }
+}
+
+// The filtered orientation's robot-frames of a result (a case's or the experiment's; 0 if none)
+// and the count of them in class `share` ("perceived", "false_positive"), from its rate.
+long orientationFrames(const json& r) {
+  const json& n = at(r, "orientation.filtered.robot_frames");
+  return n.is_number() ? n.get<long>() : 0L;
+}
+long orientationCount(const json& r, const std::string& share) {
+  const json& f = at(r, "orientation.filtered." + share);
+  return f.is_number() ? std::lround(f.get<double>() * static_cast<double>(orientationFrames(r))) : 0L;
 }
 
 std::string fmt(const json& v, int prec = 3, double scale = 1, const char* unit = "") {
@@ -120,7 +135,8 @@ json orientationSummary(const json& r, const std::string& id, double paper) {
 }
 
 json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::string, double>& targets) {
-  // The setting charted: the first numeric setting that takes more than one value.
+  // The setting charted: the scenario's first swept path when numeric (any others are averaged
+  // over), else the first numeric setting that takes more than one value.
   std::string setting;
   std::map<std::string, std::set<double>> values;
   for (const auto& c : r.at("cases")) {
@@ -128,6 +144,7 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
       if (it.value().is_number()) values[it.key()].insert(it.value().get<double>());
     }
   }
+  if (values.contains(e.swept_setting) && values.at(e.swept_setting).size() > 1) setting = e.swept_setting;
   for (const auto& c : r.at("cases")) {
     for (auto it = c.at("settings").begin(); it != c.at("settings").end() && setting.empty(); ++it) {
       if (values[it.key()].size() > 1) setting = it.key();
@@ -140,14 +157,16 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
   for (const auto& sr : kSweptRates) {
     json rates = json::array();
     json below = json::array();
-    const bool ran = at(r, sr.section + ".counts." + sr.ran).is_number() &&
-                     at(r, sr.section + ".counts." + sr.ran).get<double>() > 0;
+    const bool from_counts = !sr.detected.empty();
+    const bool ran = from_counts ? at(r, sr.section + ".counts." + sr.ran).is_number() &&
+                                       at(r, sr.section + ".counts." + sr.ran).get<double>() > 0
+                                 : orientationFrames(r) > 0;
     for (double v : values[setting]) {
       long det = 0, tru = 0;
       for (const auto& c : r.at("cases")) {
         if (!c.at("settings").contains(setting) || c.at("settings").at(setting).get<double>() != v) continue;
-        det += at(c, sr.section + ".counts." + sr.detected).get<long>();
-        tru += at(c, sr.section + ".counts." + sr.truths).get<long>();
+        det += from_counts ? at(c, sr.section + ".counts." + sr.detected).get<long>() : orientationCount(c, "perceived");
+        tru += from_counts ? at(c, sr.section + ".counts." + sr.truths).get<long>() : orientationFrames(c);
       }
       const json rate = ran && tru > 0 ? json(static_cast<double>(det) / tru) : json(nullptr);
       rates.push_back(rate);
@@ -157,12 +176,13 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
     s["rates"][sr.metric] = rates;
     s["below_target"][sr.metric] = ran ? below : json(nullptr);
   }
-  // Beside the rates: the robots' false positives per frame and the detected robots' and balls'
-  // mean position errors on the ground (metres; what a wrong camera pose costs,
-  // sweeps/camera_*_error.yaml).
+  // Beside the rates: the filtered orientation's false share of the robot-frames, the robots' false
+  // positives per frame and the detected robots' and balls' mean position errors on the ground
+  // (metres; what a wrong camera pose costs, sweeps/camera_*_error.yaml).
   json robot_fp = json::array(), robot_error = json::array(), ball_error = json::array();
+  json orientation_fp = json::array();
   for (double v : values[setting]) {
-    long fp = 0, frames = 0;
+    long fp = 0, frames = 0, ori_fp = 0, ori_frames = 0;
     long errors[2] = {0, 0};
     double error_sums[2] = {0, 0};
     for (const auto& c : r.at("cases")) {
@@ -173,6 +193,8 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
       };
       fp += count("robot.counts.false_positives");
       frames += count("robot.counts.detector_frames");
+      ori_fp += orientationCount(c, "false_positive");
+      ori_frames += orientationFrames(c);
       const char* objects[2] = {"robot", "ball"};
       for (int o = 0; o < 2; ++o) {
         const long n = count(std::string(objects[o]) + ".counts.position_errors");
@@ -182,9 +204,11 @@ json sweepSummary(const BenchExperiment& e, const json& r, const std::map<std::s
       }
     }
     robot_fp.push_back(frames > 0 ? json(static_cast<double>(fp) / frames) : json(nullptr));
+    orientation_fp.push_back(ori_frames > 0 ? json(static_cast<double>(ori_fp) / ori_frames) : json(nullptr));
     robot_error.push_back(errors[0] > 0 ? json(error_sums[0] / errors[0]) : json(nullptr));
     ball_error.push_back(errors[1] > 0 ? json(error_sums[1] / errors[1]) : json(nullptr));
   }
+  s["orientation_false_positive"] = orientation_fp;
   s["robot_false_positives_per_frame"] = robot_fp;
   s["robot_position_error_m"] = robot_error;
   s["ball_position_error_m"] = ball_error;
@@ -219,10 +243,10 @@ std::string sweepChart(const json& s) {
   }
   o << "<text x=" << (l + w - r) / 2 << " y=" << h - 4 << " class=ax text-anchor=middle>"
     << esc(s.at("setting").get<std::string>()) << "</text>";
-  const char* colours[] = {"#1f6fd1", "#d6453d", "#2e9d4a", "#8e44ad"};
+  const char* colours[] = {"#1f6fd1", "#d6453d", "#2e9d4a", "#8e44ad", "#d68a1f"};
   int row = 0;
   for (const auto& sr : kSweptRates) {
-    const std::string colour = colours[row % 4];
+    const std::string colour = colours[row % 5];
     const json& rates = s.at("rates").at(sr.metric);
     std::string path;
     for (std::size_t i = 0; i < rates.size(); ++i) {
@@ -568,7 +592,7 @@ void printBenchTables(const json& results) {
     }
   }
   if (s.contains("sweeps") && !s.at("sweeps").empty()) {
-    std::printf("\nSweeps: detection rate per setting value (targets:");
+    std::printf("\nSweeps: rate per setting value, detection and the filtered orientation perceived (targets:");
     for (auto it = b.at("targets").begin(); it != b.at("targets").end(); ++it) {
       std::printf(" %s %s", it.key().c_str(), fmt(it.value(), 2).c_str());
     }

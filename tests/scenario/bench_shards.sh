@@ -17,12 +17,20 @@ done
 "$bin" merge "$out/s0" "$out/s1" "$out/s2" --out "$out/merged" >"$out/merge.log" 2>&1 || fail "merge: $(cat "$out/merge.log")"
 [ -s "$out/merged/report.html" ] || fail "merge wrote no report.html"
 "$compare" "$out/whole/results.json" "$out/merged/results.json" || fail "sharded and unsharded results differ"
-grep -q '"frames": 13' "$out/merged/results.json" || fail "merged results do not count 13 frames"
+grep -q '"frames": 21' "$out/merged/results.json" || fail "merged results do not count 21 frames"
 grep -Eq "^  hard +2 .*field_features.line_detection_rate >= 1.01$" "$out/whole.log" ||
   fail "the bench's hard-set table does not list the scenario's unmet expectation: $(cat "$out/whole.log")"
 grep -q '"unmet": \[' "$out/merged/results.json" || fail "merged results have no hard-set summary"
-# The sweep's table: each detector's rate per value, then the robots' false positives per frame and
+# The sweep's table charts its first swept path (the light scale's four values; the noise, which
+# sorts first among the settings, averaged over): each detector's rate per value and the filtered
+# orientation's perceived share, then its false share, the robots' false positives per frame and
 # the detected robots' and balls' mean position errors in metres (one number per light scale).
+grep -Eq "^  sweep \(lighting.scale\):$" "$out/whole.log" ||
+  fail "the sweep table does not chart the first swept path: $(cat "$out/whole.log")"
+grep -Eq "^    orientation( +[0-9]+\.[0-9]{2}){4}   " "$out/whole.log" ||
+  fail "the sweep table has no row of the orientation's perceived share: $(cat "$out/whole.log")"
+grep -Eq "^    ori false( +([0-9]+\.[0-9]{2}|absent)){4}$" "$out/whole.log" ||
+  fail "the sweep table has no row of the orientation's false share: $(cat "$out/whole.log")"
 grep -Eq "^    robot FP/f( +[0-9]+\.[0-9]{2}){4}$" "$out/whole.log" ||
   fail "the sweep table has no row of robot false positives per frame: $(cat "$out/whole.log")"
 grep -Eq "^    robot err m( +([0-9]+\.[0-9]{3}|absent)){4}$" "$out/whole.log" ||
