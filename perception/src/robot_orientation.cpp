@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <numbers>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -49,6 +50,9 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.min_line_votes = f.getInRange("min_line_votes", 0, 1000);
   p.line_max_voter_gap_m = f.getInRange("line_max_voter_gap_m", 0, 2);
   p.line_max_feet_distance_m = f.getInRange("line_max_feet_distance_m", 0, 10);
+  p.field_line_margin_px = f.getInRange("field_line_margin_px", 0, 50);
+  p.field_line_min_length_m = f.getInRange("field_line_min_length_m", 0, 20);
+  p.field_line_min_angle_deg = f.getInRange("field_line_min_angle_deg", 0, 90);
   p.region_margin_fraction = f.getInRange("region_margin_fraction", 0, 2);
   p.region_above_fraction = f.getInRange("region_above_fraction", 0, 2);
   p.region_below_fraction = f.getInRange("region_below_fraction", 0, 2);
@@ -323,6 +327,7 @@ RobotOrientationEstimator::RobotOrientationEstimator(RobotOrientationParams para
                                                      cnn::Classifier ori_net)
     : params_(params),
       robot_height_m_(field.robot_height_m),
+      line_half_width_m_(field.line_width_m / 2),
       boost_(std::move(ori_boost_net)),
       ori_(std::move(ori_net)) {
   if (boost_.classes() != 2 || ori_.classes() != 4) {
@@ -412,7 +417,8 @@ int belowDarkPanel(const GrayView& image, int x, int row, const DarkPanel& panel
 }  // namespace
 
 RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const CameraModel& camera,
-                                                const RobotPercept& robot) const {
+                                                const RobotPercept& robot,
+                                                const std::vector<LinePercept>& field_lines) const {
   const RobotOrientationParams& p = params_;
   RobotLines out;
   const double h = robot.box.height();
@@ -617,9 +623,53 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   first_hit.reserve(static_cast<std::size_t>(columns) + 1);
   out.silhouette_px.reserve(columns);
   out.silhouette_in_robot.reserve(columns);
+  // The field lines whose lower edge may pass for the feet's: long, across the line of sight,
+  // near the feet; each as a point, its unit direction and its length on the ground.
+  struct GroundLine {
+    Eigen::Vector2d a, u;
+    double length;
+  };
+  std::vector<GroundLine> near_lines;
+  const std::optional<Eigen::Vector2d> feet_ground = camera.pixelToGround(robot.feet_px);
+  if (p.field_line_margin_px > 0 && feet_ground) {
+    const Eigen::Vector2d sight = (*feet_ground - camera.position().head<2>()).normalized();
+    const double max_cos = std::cos(p.field_line_min_angle_deg * std::numbers::pi / 180);
+    for (const LinePercept& l : field_lines) {
+      const Eigen::Vector2d d = l.end_in_robot - l.start_in_robot;
+      const double length = d.norm();
+      if (length < p.field_line_min_length_m) continue;
+      const Eigen::Vector2d u = d / length;
+      if (std::abs(u.dot(sight)) > max_cos) continue;
+      // Near the feet: within the lines generator's reach of the feet point.
+      const double t = std::clamp((*feet_ground - l.start_in_robot).dot(u), 0.0, length);
+      if ((l.start_in_robot + t * u - *feet_ground).norm() > p.line_max_feet_distance_m + line_half_width_m_) continue;
+      near_lines.push_back({l.start_in_robot, u, length});
+    }
+  }
+  // A hit on such a line: its ground point within the line's half width, grown by the margin's
+  // pixels on the ground there (a pixel's depth), of the line's middle.
+  const auto onFieldLine = [&](const Hit& hit) {
+    if (near_lines.empty()) return false;
+    const double x = scan_x[hit.column] + 0.5, y = hit.row + 0.5;
+    const auto g = camera.pixelToGround({x, y});
+    const auto g_above = camera.pixelToGround({x, y - 1});
+    if (!g || !g_above) return false;
+    const double band = line_half_width_m_ + p.field_line_margin_px * (*g - *g_above).norm();
+    for (const GroundLine& l : near_lines) {
+      const Eigen::Vector2d q = *g - l.a;
+      const double along = q.dot(l.u);
+      if (along >= -band && along <= l.length + band && std::abs(q.x() * l.u.y() - q.y() * l.u.x()) <= band) {
+        return true;
+      }
+    }
+    return false;
+  };
   for (int c = 0; c < columns; ++c) {
     first_hit.push_back(static_cast<int>(hits.size()));
-    for (int k = 0; k < found[c]; ++k) hits.push_back(column_hits[static_cast<std::size_t>(c) * kMaxHits + k]);
+    for (int k = 0; k < found[c]; ++k) {
+      const Hit& hit = column_hits[static_cast<std::size_t>(c) * kMaxHits + k];
+      if (!onFieldLine(hit)) hits.push_back(hit);
+    }
   }
   first_hit.push_back(static_cast<int>(hits.size()));
   // Chains: hits on neighbouring scan lines within a few rows. The feet's edges make long chains,
@@ -688,7 +738,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   bounds.max_voter_gap = p.line_max_voter_gap_m;
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
   std::optional<Eigen::Vector2d> first_direction;
-  const std::optional<Eigen::Vector2d> feet_on_ground = camera.pixelToGround(robot.feet_px);
+  const std::optional<Eigen::Vector2d>& feet_on_ground = feet_ground;
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
     // Twice: the hull edge's direction is rough, the first fit's much less so.
@@ -740,8 +790,9 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
 }
 
 RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const CameraModel& camera,
-                                               const RobotPercept& robot) const {
-  RobotLines out = findLines(image, camera, robot);
+                                               const RobotPercept& robot,
+                                               const std::vector<LinePercept>& field_lines) const {
+  RobotLines out = findLines(image, camera, robot, field_lines);
   if (out.regions.empty()) return out;
   std::vector<cnn::PatchBox> boxes;
   for (const LineRegion& r : out.regions) {
@@ -829,8 +880,8 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
 
 void RobotOrientationEstimator::run(const GrayView& image, const CameraModel& camera,
                                     std::vector<RobotPercept>& robots, RobotTracks& tracks,
-                                    double time_s) const {
-  for (RobotPercept& r : robots) r.orientation_raw = estimate(image, camera, r).orientation;
+                                    double time_s, const std::vector<LinePercept>& field_lines) const {
+  for (RobotPercept& r : robots) r.orientation_raw = estimate(image, camera, r, field_lines).orientation;
   OrientationFilterParams filter;
   filter.buffer_size = params_.filter_buffer_size;
   filter.expiry_s = params_.track_expiry_s;

@@ -88,9 +88,12 @@ void bmRobotOrientation(benchmark::State& state) {
   Fixture& f = fixture();
   RobotTracks tracks;
   double t = 0;
+  // The frame's field lines, as the pipeline gives them (the stage drops their edges near feet).
+  const std::vector<LinePercept> lines =
+      f.frame->field_lines ? f.frame->field_lines->features.lines : std::vector<LinePercept>{};
   for (auto _ : state) {
     std::vector<RobotPercept> robots = f.robots;
-    f.orientation.run(f.frame->image, f.frame->camera, robots, tracks, t);
+    f.orientation.run(f.frame->image, f.frame->camera, robots, tracks, t, lines);
     t += 1.0 / 30;
     benchmark::DoNotOptimize(robots);
   }

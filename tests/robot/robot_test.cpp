@@ -1828,6 +1828,54 @@ TEST(LinesGenerator, IgnoresTheCastShadowBelowAFootBlock) {
   }
 }
 
+// A field line on the carpet just in front of the feet (its middle 0.07 m before the block's near
+// face, 0.05 wide, 3 m long across the line of sight): its lower edge is bright above dark like the
+// feet's and lower in the image, so without the field lines the silhouette lies on it. Given the
+// frame's detected field lines, its edge is dropped and the silhouette is the block's again; a
+// short line (a robot's leg taken for one) or one along the line of sight drops nothing.
+TEST(LinesGenerator, ADetectedFieldLineInFrontOfTheFeetIsNoSilhouette) {
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(13);
+  const Eigen::Vector2d centre(1.2, 0.0);
+  const double line_x = centre.x() - 0.08 - 0.07;
+  std::vector<cv::Point> stripe;
+  for (const auto& [x, y] : std::vector<std::pair<double, double>>{
+           {line_x - 0.025, -1.5}, {line_x - 0.025, 1.5}, {line_x + 0.025, 1.5}, {line_x + 0.025, -1.5}}) {
+    const auto q = cam.robotToPixel({x, y, 0});
+    stripe.emplace_back(int(std::lround(q->x())), int(std::lround(q->y())));
+  }
+  cv::Mat m = wrap(img);
+  cv::fillConvexPoly(m, stripe, cv::Scalar(200));
+  const std::vector<cv::Point> hull = footBlockHull(cam, centre, 0);
+  cv::fillConvexPoly(m, hull, cv::Scalar(200));
+  const RobotPercept robot = perceptOfBlock(cam, hull, centre);
+  int lowest_block = 0;
+  for (const auto& q : hull) lowest_block = std::max(lowest_block, q.y);
+  const auto onStripe = [&](const Eigen::Vector2d& q) { return q.y() > lowest_block + 3; };
+  LinePercept field_line;
+  field_line.start_in_robot = {line_x, -1.5};
+  field_line.end_in_robot = {line_x, 1.5};
+  LinePercept short_line = field_line;
+  short_line.start_in_robot = {line_x, -0.2};
+  short_line.end_in_robot = {line_x, 0.2};
+  LinePercept along_sight = field_line;
+  along_sight.start_in_robot = {line_x - 1.0, 0.0};
+  along_sight.end_in_robot = {line_x + 1.0, 0.0};
+  const RobotOrientationEstimator estimator = untrainedEstimator();
+  ASSERT_GT(estimator.params().field_line_margin_px, 0);
+  ASSERT_GT(estimator.params().field_line_min_length_m, 0.4);
+  for (const auto& lines : {std::vector<LinePercept>{}, {short_line}, {along_sight}}) {
+    const RobotLines out = estimator.findLines(img.view(), cam, robot, lines);
+    EXPECT_TRUE(std::any_of(out.silhouette_px.begin(), out.silhouette_px.end(), onStripe)) << lines.size();
+  }
+  const RobotLines out = estimator.findLines(img.view(), cam, robot, {field_line});
+  EXPECT_GT(out.silhouette_px.size(), 20u);
+  for (const auto& q : out.silhouette_px) EXPECT_FALSE(onStripe(q)) << q.transpose();
+  ASSERT_FALSE(out.regions.empty());
+  const Eigen::Vector2d mid = (out.regions[0].line_in_robot.a + out.regions[0].line_in_robot.b) / 2;
+  EXPECT_NEAR(mid.x(), centre.x() - 0.08, 0.02);  // the block's near edge
+}
+
 // OriNet looks at each region as it is and mirrored, the mirrored look's side classes swapped: a
 // stand-in OriNet that says "side facing left" more surely when a region's left half is the
 // brighter (logit 2 as it is, 1 mirrored, against 0 for the front) gives a side region of unknown

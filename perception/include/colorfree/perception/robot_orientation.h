@@ -89,6 +89,15 @@ struct RobotOrientationParams {
   /// A line whose middle lies farther than this from the feet point's ground position is not the
   /// feet's edge (0: no limit)
   double line_max_feet_distance_m = 0.3;
+  /// A detected field line in the feet region (at least field_line_min_length_m long on the
+  /// ground, crossing the line of sight to the robot at field_line_min_angle_deg or more) has a
+  /// bright-above-dark lower edge like the feet's: silhouette edges whose ground point lies within
+  /// the line's half width, grown by field_line_margin_px pixels' depth on the ground, of its
+  /// middle (as far beyond its ends) are dropped, so the feet above it are the silhouette there
+  /// (0: off).
+  double field_line_margin_px = 2;
+  double field_line_min_length_m = 0.5;
+  double field_line_min_angle_deg = 30;
   double region_margin_fraction = 0.25;      ///< region: line width grown by this at both ends
   double region_above_fraction = 0.35;       ///< region height above the line, in robot heights
   double region_below_fraction = 0.06;       ///< below the line, in robot heights
@@ -149,20 +158,22 @@ class RobotOrientationEstimator {
   static RobotOrientationEstimator loadDefault();
 
   /// Lines generator and line regions (no classification).
-  RobotLines findLines(const GrayView& image, const CameraModel& camera,
-                       const RobotPercept& robot) const;
+  /// `field_lines`: the frame's detected field lines (their lower edges are not the feet's).
+  RobotLines findLines(const GrayView& image, const CameraModel& camera, const RobotPercept& robot,
+                       const std::vector<LinePercept>& field_lines = {}) const;
   /// Lines, OriBoostNet, OriNet, consistency check and orientation of one robot.
-  RobotLines estimate(const GrayView& image, const CameraModel& camera,
-                      const RobotPercept& robot) const;
+  RobotLines estimate(const GrayView& image, const CameraModel& camera, const RobotPercept& robot,
+                      const std::vector<LinePercept>& field_lines = {}) const;
   /// Fills orientation_raw, track_id and orientation_filtered of every percept; updates `tracks`
   /// (association by ground position, expiry). `time_s` is the frame's time.
   void run(const GrayView& image, const CameraModel& camera, std::vector<RobotPercept>& robots,
-           RobotTracks& tracks, double time_s) const;
+           RobotTracks& tracks, double time_s, const std::vector<LinePercept>& field_lines = {}) const;
   const RobotOrientationParams& params() const { return params_; }
 
  private:
   RobotOrientationParams params_;
   double robot_height_m_;
+  double line_half_width_m_;  ///< the field lines', from the field dimensions
   cnn::Classifier boost_;
   cnn::Classifier ori_;
 };
