@@ -692,8 +692,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   const double min_chain = std::max<double>(p.silhouette_min_chain_px,
                                             p.silhouette_min_chain_fraction * robot.box.width() / p.scan_step_px);
   // Per scan line, the lowest hit on a long chain is the lower silhouette (below a dark panel:
-  // its lower end).
-  // Per scan line its hit, and the row below a panel there (-1: none); a chain's points move
+  // its lower end): its hit, and the row below a panel there (-1: none); a chain's points move
   // below panels only where most of its points have one (a heel's edge does; a cast shadow's
   // slanted edge gives a short dark stretch on a few scan lines).
   std::vector<int> chosen(columns, -1), below_panel(columns, -1);
@@ -738,7 +737,6 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   bounds.max_voter_gap = p.line_max_voter_gap_m;
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
   std::optional<Eigen::Vector2d> first_direction;
-  const std::optional<Eigen::Vector2d>& feet_on_ground = feet_ground;
   for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
     // Twice: the hull edge's direction is rough, the first fit's much less so.
@@ -753,8 +751,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     }
     // Far behind the feet point it is the edge of lit carpet or of a field line in the feet
     // region, not the feet's.
-    if (p.line_max_feet_distance_m > 0 && feet_on_ground &&
-        ((line->a + line->b) / 2 - *feet_on_ground).norm() > p.line_max_feet_distance_m) {
+    if (p.line_max_feet_distance_m > 0 && feet_ground &&
+        ((line->a + line->b) / 2 - *feet_ground).norm() > p.line_max_feet_distance_m) {
       continue;
     }
     if (!first_direction) first_direction = line->direction();
