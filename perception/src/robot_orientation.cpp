@@ -328,6 +328,7 @@ RobotOrientationEstimator::RobotOrientationEstimator(RobotOrientationParams para
     : params_(params),
       robot_height_m_(field.robot_height_m),
       line_half_width_m_(field.line_width_m / 2),
+      centre_circle_radius_m_(field.centre_circle_diameter_m / 2),
       boost_(std::move(ori_boost_net)),
       ori_(std::move(ori_net)) {
   if (boost_.classes() != 2 || ori_.classes() != 4) {
@@ -418,7 +419,7 @@ int belowDarkPanel(const GrayView& image, int x, int row, const DarkPanel& panel
 
 RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const CameraModel& camera,
                                                 const RobotPercept& robot,
-                                                const std::vector<LinePercept>& field_lines) const {
+                                                const FieldFeatures& field) const {
   const RobotOrientationParams& p = params_;
   RobotLines out;
   const double h = robot.box.height();
@@ -624,32 +625,51 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   out.silhouette_px.reserve(columns);
   out.silhouette_in_robot.reserve(columns);
   // The field lines whose lower edge may pass for the feet's: long, across the line of sight,
-  // near the feet; each as a point, its unit direction and its length on the ground.
+  // through the feet region; each as a point, its unit direction and its length on the ground.
+  // The centre circle where it passes near the feet, across the line of sight there.
   struct GroundLine {
     Eigen::Vector2d a, u;
     double length;
   };
   std::vector<GroundLine> near_lines;
+  std::optional<Eigen::Vector2d> near_circle;  // its centre
   const std::optional<Eigen::Vector2d> feet_ground = camera.pixelToGround(robot.feet_px);
   if (p.field_line_margin_px > 0 && feet_ground) {
     const Eigen::Vector2d sight = (*feet_ground - camera.position().head<2>()).normalized();
     const double max_cos = std::cos(p.field_line_min_angle_deg * std::numbers::pi / 180);
-    for (const LinePercept& l : field_lines) {
+    for (const LinePercept& l : field.lines) {
       const Eigen::Vector2d d = l.end_in_robot - l.start_in_robot;
       const double length = d.norm();
       if (length < p.field_line_min_length_m) continue;
       const Eigen::Vector2d u = d / length;
       if (std::abs(u.dot(sight)) > max_cos) continue;
-      // Near the feet: within the lines generator's reach of the feet point.
-      const double t = std::clamp((*feet_ground - l.start_in_robot).dot(u), 0.0, length);
-      if ((l.start_in_robot + t * u - *feet_ground).norm() > p.line_max_feet_distance_m + line_half_width_m_) continue;
+      // Through the feet region in the image: its rows over the region's columns.
+      const Eigen::Vector2d& pa = l.start_px.x() <= l.end_px.x() ? l.start_px : l.end_px;
+      const Eigen::Vector2d& pb = l.start_px.x() <= l.end_px.x() ? l.end_px : l.start_px;
+      const double x0 = std::max<double>(pa.x(), x_left), x1 = std::min<double>(pb.x(), x_right);
+      if (x0 > x1) continue;
+      const auto rowAt = [&](double x) {
+        return pb.x() > pa.x() ? pa.y() + (x - pa.x()) * (pb.y() - pa.y()) / (pb.x() - pa.x()) : pa.y();
+      };
+      if (std::max(rowAt(x0), rowAt(x1)) < y_top || std::min(rowAt(x0), rowAt(x1)) > y_bottom) continue;
       near_lines.push_back({l.start_in_robot, u, length});
+    }
+    if (field.centre_circle) {
+      const Eigen::Vector2d radial = *feet_ground - field.centre_circle->centre_in_robot;
+      const double r = radial.norm();
+      // Within the lines generator's reach of the feet point, its tangent there across the line
+      // of sight.
+      const double reach = p.line_max_feet_distance_m + line_half_width_m_;
+      if (std::abs(r - centre_circle_radius_m_) <= reach && r > 0 &&
+          std::abs(Eigen::Vector2d(-radial.y(), radial.x()).dot(sight)) / r <= max_cos) {
+        near_circle = field.centre_circle->centre_in_robot;
+      }
     }
   }
   // A hit on such a line: its ground point within the line's half width, grown by the margin's
   // pixels on the ground there (a pixel's depth), of the line's middle.
   const auto onFieldLine = [&](const Hit& hit) {
-    if (near_lines.empty()) return false;
+    if (near_lines.empty() && !near_circle) return false;
     const double x = scan_x[hit.column] + 0.5, y = hit.row + 0.5;
     const auto g = camera.pixelToGround({x, y});
     const auto g_above = camera.pixelToGround({x, y - 1});
@@ -662,7 +682,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
         return true;
       }
     }
-    return false;
+    return near_circle && std::abs((*g - *near_circle).norm() - centre_circle_radius_m_) <= band;
   };
   for (int c = 0; c < columns; ++c) {
     first_hit.push_back(static_cast<int>(hits.size()));
@@ -789,8 +809,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
 
 RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const CameraModel& camera,
                                                const RobotPercept& robot,
-                                               const std::vector<LinePercept>& field_lines) const {
-  RobotLines out = findLines(image, camera, robot, field_lines);
+                                               const FieldFeatures& field) const {
+  RobotLines out = findLines(image, camera, robot, field);
   if (out.regions.empty()) return out;
   std::vector<cnn::PatchBox> boxes;
   for (const LineRegion& r : out.regions) {
@@ -878,8 +898,8 @@ RobotLines RobotOrientationEstimator::estimate(const GrayView& image, const Came
 
 void RobotOrientationEstimator::run(const GrayView& image, const CameraModel& camera,
                                     std::vector<RobotPercept>& robots, RobotTracks& tracks,
-                                    double time_s, const std::vector<LinePercept>& field_lines) const {
-  for (RobotPercept& r : robots) r.orientation_raw = estimate(image, camera, r, field_lines).orientation;
+                                    double time_s, const FieldFeatures& field) const {
+  for (RobotPercept& r : robots) r.orientation_raw = estimate(image, camera, r, field).orientation;
   OrientationFilterParams filter;
   filter.buffer_size = params_.filter_buffer_size;
   filter.expiry_s = params_.track_expiry_s;

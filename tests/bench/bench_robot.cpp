@@ -88,12 +88,12 @@ void bmRobotOrientation(benchmark::State& state) {
   Fixture& f = fixture();
   RobotTracks tracks;
   double t = 0;
-  // The frame's field lines, as the pipeline gives them (the stage drops their edges near feet).
-  const std::vector<LinePercept> lines =
-      f.frame->field_lines ? f.frame->field_lines->features.lines : std::vector<LinePercept>{};
+  // The frame's field lines and features, as the pipeline gives them (the stage drops their edges
+  // near feet).
+  const FieldFeatures field = f.frame->field_lines ? f.frame->field_lines->features : FieldFeatures{};
   for (auto _ : state) {
     std::vector<RobotPercept> robots = f.robots;
-    f.orientation.run(f.frame->image, f.frame->camera, robots, tracks, t, lines);
+    f.orientation.run(f.frame->image, f.frame->camera, robots, tracks, t, field);
     t += 1.0 / 30;
     benchmark::DoNotOptimize(robots);
   }

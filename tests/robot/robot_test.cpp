@@ -1829,29 +1829,21 @@ TEST(LinesGenerator, IgnoresTheCastShadowBelowAFootBlock) {
 }
 
 // A field line on the carpet just in front of the feet (its middle 0.07 m before the block's near
-// face, 0.05 wide, 3 m long across the line of sight): its lower edge is bright above dark like the
-// feet's and lower in the image, so without the field lines the silhouette lies on it. Given the
-// frame's detected field lines, its edge is dropped and the silhouette is the block's again; a
-// short line (a robot's leg taken for one) or one along the line of sight drops nothing.
+// face, 0.05 wide, 3 m long across the line of sight), or the centre circle's line passing there:
+// its lower edge is bright above dark like the feet's and lower in the image, so without the field
+// features the silhouette lies on it. Given the frame's detected lines (or circle), its edge is
+// dropped and the silhouette is the block's again; a short line (a robot's leg taken for one) or
+// one along the line of sight drops nothing.
 TEST(LinesGenerator, ADetectedFieldLineInFrontOfTheFeetIsNoSilhouette) {
   const CameraModel cam = testCamera();
-  GrayImage img = carpet(13);
   const Eigen::Vector2d centre(1.2, 0.0);
   const double line_x = centre.x() - 0.08 - 0.07;
-  std::vector<cv::Point> stripe;
-  for (const auto& [x, y] : std::vector<std::pair<double, double>>{
-           {line_x - 0.025, -1.5}, {line_x - 0.025, 1.5}, {line_x + 0.025, 1.5}, {line_x + 0.025, -1.5}}) {
+  const double radius = FieldDimensions::loadDefault().centre_circle_diameter_m / 2;
+  const Eigen::Vector2d circle_centre(line_x - radius, 0.0);
+  const auto px = [&](double x, double y) {
     const auto q = cam.robotToPixel({x, y, 0});
-    stripe.emplace_back(int(std::lround(q->x())), int(std::lround(q->y())));
-  }
-  cv::Mat m = wrap(img);
-  cv::fillConvexPoly(m, stripe, cv::Scalar(200));
-  const std::vector<cv::Point> hull = footBlockHull(cam, centre, 0);
-  cv::fillConvexPoly(m, hull, cv::Scalar(200));
-  const RobotPercept robot = perceptOfBlock(cam, hull, centre);
-  int lowest_block = 0;
-  for (const auto& q : hull) lowest_block = std::max(lowest_block, q.y);
-  const auto onStripe = [&](const Eigen::Vector2d& q) { return q.y() > lowest_block + 3; };
+    return cv::Point(int(std::lround(q->x())), int(std::lround(q->y())));
+  };
   LinePercept field_line;
   field_line.start_in_robot = {line_x, -1.5};
   field_line.end_in_robot = {line_x, 1.5};
@@ -1861,19 +1853,58 @@ TEST(LinesGenerator, ADetectedFieldLineInFrontOfTheFeetIsNoSilhouette) {
   LinePercept along_sight = field_line;
   along_sight.start_in_robot = {line_x - 1.0, 0.0};
   along_sight.end_in_robot = {line_x + 1.0, 0.0};
+  // As the field lines stage gives them: ends on the ground and in the image.
+  const auto features = [&](std::vector<LinePercept> lines, bool circle) {
+    FieldFeatures f;
+    for (LinePercept& l : lines) {
+      l.start_px = *cam.robotToPixel({l.start_in_robot.x(), l.start_in_robot.y(), 0});
+      l.end_px = *cam.robotToPixel({l.end_in_robot.x(), l.end_in_robot.y(), 0});
+    }
+    f.lines = std::move(lines);
+    if (circle) f.centre_circle = CircleMarkPercept{circle_centre, *cam.robotToPixel({circle_centre.x(), 0, 0})};
+    return f;
+  };
   const RobotOrientationEstimator estimator = untrainedEstimator();
   ASSERT_GT(estimator.params().field_line_margin_px, 0);
   ASSERT_GT(estimator.params().field_line_min_length_m, 0.4);
-  for (const auto& lines : {std::vector<LinePercept>{}, {short_line}, {along_sight}}) {
-    const RobotLines out = estimator.findLines(img.view(), cam, robot, lines);
-    EXPECT_TRUE(std::any_of(out.silhouette_px.begin(), out.silhouette_px.end(), onStripe)) << lines.size();
+  for (const bool ring : {false, true}) {
+    SCOPED_TRACE(ring ? "centre circle" : "straight line");
+    GrayImage img = carpet(13);
+    cv::Mat m = wrap(img);
+    if (ring) {
+      // The circle's line (0.05 wide) as a polygon ring of 360 steps.
+      for (int k = 0; k < 360; ++k) {
+        std::vector<cv::Point> piece;
+        for (const auto& [r, a] : std::vector<std::pair<double, int>>{
+                 {radius - 0.025, k}, {radius - 0.025, k + 1}, {radius + 0.025, k + 1}, {radius + 0.025, k}}) {
+          const double t = a * std::numbers::pi / 180;
+          piece.push_back(px(circle_centre.x() + r * std::cos(t), r * std::sin(t)));
+        }
+        cv::fillConvexPoly(m, piece, cv::Scalar(200));
+      }
+    } else {
+      cv::fillConvexPoly(m, std::vector<cv::Point>{px(line_x - 0.025, -1.5), px(line_x - 0.025, 1.5),
+                                                   px(line_x + 0.025, 1.5), px(line_x + 0.025, -1.5)},
+                         cv::Scalar(200));
+    }
+    const std::vector<cv::Point> hull = footBlockHull(cam, centre, 0);
+    cv::fillConvexPoly(m, hull, cv::Scalar(200));
+    const RobotPercept robot = perceptOfBlock(cam, hull, centre);
+    int lowest_block = 0;
+    for (const auto& q : hull) lowest_block = std::max(lowest_block, q.y);
+    const auto onStripe = [&](const Eigen::Vector2d& q) { return q.y() > lowest_block + 3; };
+    for (const auto& lines : {std::vector<LinePercept>{}, {short_line}, {along_sight}}) {
+      const RobotLines out = estimator.findLines(img.view(), cam, robot, features(lines, false));
+      EXPECT_TRUE(std::any_of(out.silhouette_px.begin(), out.silhouette_px.end(), onStripe)) << lines.size();
+    }
+    const RobotLines out = estimator.findLines(
+        img.view(), cam, robot, ring ? features({}, true) : features({field_line}, false));
+    EXPECT_GT(out.silhouette_px.size(), 20u);
+    for (const auto& q : out.silhouette_px) EXPECT_FALSE(onStripe(q)) << q.transpose();
+    ASSERT_FALSE(out.regions.empty());
+    const Eigen::Vector2d mid = (out.regions[0].line_in_robot.a + out.regions[0].line_in_robot.b) / 2;
+    EXPECT_NEAR(mid.x(), centre.x() - 0.08, 0.02);  // the block's near edge
   }
-  const RobotLines out = estimator.findLines(img.view(), cam, robot, {field_line});
-  EXPECT_GT(out.silhouette_px.size(), 20u);
-  for (const auto& q : out.silhouette_px) EXPECT_FALSE(onStripe(q)) << q.transpose();
-  ASSERT_FALSE(out.regions.empty());
-  const Eigen::Vector2d mid = (out.regions[0].line_in_robot.a + out.regions[0].line_in_robot.b) / 2;
-  EXPECT_NEAR(mid.x(), centre.x() - 0.08, 0.02);  // the block's near edge
 }
 
 // OriNet looks at each region as it is and mirrored, the mirrored look's side classes swapped: a

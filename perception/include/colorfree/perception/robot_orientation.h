@@ -89,12 +89,12 @@ struct RobotOrientationParams {
   /// A line whose middle lies farther than this from the feet point's ground position is not the
   /// feet's edge (0: no limit)
   double line_max_feet_distance_m = 0.3;
-  /// A detected field line in the feet region (at least field_line_min_length_m long on the
-  /// ground, crossing the line of sight to the robot at field_line_min_angle_deg or more) has a
-  /// bright-above-dark lower edge like the feet's: silhouette edges whose ground point lies within
-  /// the line's half width, grown by field_line_margin_px pixels' depth on the ground, of its
-  /// middle (as far beyond its ends) are dropped, so the feet above it are the silhouette there
-  /// (0: off).
+  /// A detected field line or centre circle in the feet region (a line at least
+  /// field_line_min_length_m long on the ground; crossing the line of sight to the robot at
+  /// field_line_min_angle_deg or more near the feet) has a bright-above-dark lower edge like the
+  /// feet's: silhouette edges whose ground point lies within the line's half width, grown by
+  /// field_line_margin_px pixels' depth on the ground, of its middle (a straight line's extended
+  /// as far beyond its ends) are dropped, so the feet above it are the silhouette there (0: off).
   double field_line_margin_px = 2;
   double field_line_min_length_m = 0.5;
   double field_line_min_angle_deg = 30;
@@ -158,22 +158,24 @@ class RobotOrientationEstimator {
   static RobotOrientationEstimator loadDefault();
 
   /// Lines generator and line regions (no classification).
-  /// `field_lines`: the frame's detected field lines (their lower edges are not the feet's).
+  /// `field`: the frame's detected field lines and centre circle (their lower edges are not the
+  /// feet's).
   RobotLines findLines(const GrayView& image, const CameraModel& camera, const RobotPercept& robot,
-                       const std::vector<LinePercept>& field_lines = {}) const;
+                       const FieldFeatures& field = {}) const;
   /// Lines, OriBoostNet, OriNet, consistency check and orientation of one robot.
   RobotLines estimate(const GrayView& image, const CameraModel& camera, const RobotPercept& robot,
-                      const std::vector<LinePercept>& field_lines = {}) const;
+                      const FieldFeatures& field = {}) const;
   /// Fills orientation_raw, track_id and orientation_filtered of every percept; updates `tracks`
   /// (association by ground position, expiry). `time_s` is the frame's time.
   void run(const GrayView& image, const CameraModel& camera, std::vector<RobotPercept>& robots,
-           RobotTracks& tracks, double time_s, const std::vector<LinePercept>& field_lines = {}) const;
+           RobotTracks& tracks, double time_s, const FieldFeatures& field = {}) const;
   const RobotOrientationParams& params() const { return params_; }
 
  private:
   RobotOrientationParams params_;
   double robot_height_m_;
-  double line_half_width_m_;  ///< the field lines', from the field dimensions
+  double line_half_width_m_;      ///< the field lines', from the field dimensions
+  double centre_circle_radius_m_;  ///< to its line's middle, from the field dimensions
   cnn::Classifier boost_;
   cnn::Classifier ori_;
 };
