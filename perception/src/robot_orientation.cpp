@@ -415,6 +415,76 @@ int belowDarkPanel(const GrayView& image, int x, int row, const DarkPanel& panel
   return end;
 }
 
+// The detected field lines and centre circle whose lower edge (a bright line above the carpet) may
+// pass for the feet's: long lines across the line of sight through the feet region in the image,
+// the circle where it passes within the lines generator's reach of the feet, across the line of
+// sight there.
+class FieldMarkingsAtFeet {
+ public:
+  FieldMarkingsAtFeet(const RobotOrientationParams& p, const FieldFeatures& field, const CameraModel& camera,
+                      const std::optional<Eigen::Vector2d>& feet_ground, int x_left, int x_right, int y_top,
+                      int y_bottom, double half_width_m, double circle_radius_m)
+      : margin_px_(p.field_line_margin_px), half_width_m_(half_width_m), circle_radius_m_(circle_radius_m) {
+    if (margin_px_ <= 0 || !feet_ground) return;
+    const Eigen::Vector2d sight = (*feet_ground - camera.position().head<2>()).normalized();
+    const double max_cos = std::cos(p.field_line_min_angle_deg * std::numbers::pi / 180);
+    for (const LinePercept& l : field.lines) {
+      const Eigen::Vector2d d = l.end_in_robot - l.start_in_robot;
+      const double length = d.norm();
+      if (length < p.field_line_min_length_m) continue;
+      const Eigen::Vector2d u = d / length;
+      if (std::abs(u.dot(sight)) > max_cos) continue;
+      // Through the feet region in the image: its rows over the region's columns.
+      const Eigen::Vector2d& pa = l.start_px.x() <= l.end_px.x() ? l.start_px : l.end_px;
+      const Eigen::Vector2d& pb = l.start_px.x() <= l.end_px.x() ? l.end_px : l.start_px;
+      const double x0 = std::max<double>(pa.x(), x_left), x1 = std::min<double>(pb.x(), x_right);
+      if (x0 > x1) continue;
+      const auto rowAt = [&](double x) {
+        return pb.x() > pa.x() ? pa.y() + (x - pa.x()) * (pb.y() - pa.y()) / (pb.x() - pa.x()) : pa.y();
+      };
+      if (std::max(rowAt(x0), rowAt(x1)) < y_top || std::min(rowAt(x0), rowAt(x1)) > y_bottom) continue;
+      lines_.push_back({l.start_in_robot, u, length});
+    }
+    if (field.centre_circle) {
+      const Eigen::Vector2d radial = *feet_ground - field.centre_circle->centre_in_robot;
+      const double r = radial.norm();
+      const double reach = p.line_max_feet_distance_m + half_width_m_;
+      if (std::abs(r - circle_radius_m_) <= reach && r > 0 &&
+          std::abs(Eigen::Vector2d(-radial.y(), radial.x()).dot(sight)) / r <= max_cos) {
+        circle_centre_ = field.centre_circle->centre_in_robot;
+      }
+    }
+  }
+
+  // Whether pixel `px`'s ground point lies on one of them: within the line's half width, grown by
+  // the margin's pixels on the ground there (a pixel's depth), of its middle (a straight line's
+  // extended as far beyond its ends).
+  bool covers(const CameraModel& camera, const Eigen::Vector2d& px) const {
+    if (lines_.empty() && !circle_centre_) return false;
+    const auto g = camera.pixelToGround(px);
+    const auto g_above = camera.pixelToGround(px - Eigen::Vector2d(0, 1));
+    if (!g || !g_above) return false;
+    const double band = half_width_m_ + margin_px_ * (*g - *g_above).norm();
+    for (const GroundLine& l : lines_) {
+      const Eigen::Vector2d q = *g - l.a;
+      const double along = q.dot(l.u);
+      if (along >= -band && along <= l.length + band && std::abs(q.x() * l.u.y() - q.y() * l.u.x()) <= band) {
+        return true;
+      }
+    }
+    return circle_centre_ && std::abs((*g - *circle_centre_).norm() - circle_radius_m_) <= band;
+  }
+
+ private:
+  struct GroundLine {
+    Eigen::Vector2d a, u;  ///< a point and the unit direction on the ground
+    double length;
+  };
+  double margin_px_, half_width_m_, circle_radius_m_;
+  std::vector<GroundLine> lines_;
+  std::optional<Eigen::Vector2d> circle_centre_;
+};
+
 }  // namespace
 
 RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const CameraModel& camera,
@@ -624,65 +694,11 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   first_hit.reserve(static_cast<std::size_t>(columns) + 1);
   out.silhouette_px.reserve(columns);
   out.silhouette_in_robot.reserve(columns);
-  // The field lines whose lower edge may pass for the feet's: long, across the line of sight,
-  // through the feet region; each as a point, its unit direction and its length on the ground.
-  // The centre circle where it passes near the feet, across the line of sight there.
-  struct GroundLine {
-    Eigen::Vector2d a, u;
-    double length;
-  };
-  std::vector<GroundLine> near_lines;
-  std::optional<Eigen::Vector2d> near_circle;  // its centre
   const std::optional<Eigen::Vector2d> feet_ground = camera.pixelToGround(robot.feet_px);
-  if (p.field_line_margin_px > 0 && feet_ground) {
-    const Eigen::Vector2d sight = (*feet_ground - camera.position().head<2>()).normalized();
-    const double max_cos = std::cos(p.field_line_min_angle_deg * std::numbers::pi / 180);
-    for (const LinePercept& l : field.lines) {
-      const Eigen::Vector2d d = l.end_in_robot - l.start_in_robot;
-      const double length = d.norm();
-      if (length < p.field_line_min_length_m) continue;
-      const Eigen::Vector2d u = d / length;
-      if (std::abs(u.dot(sight)) > max_cos) continue;
-      // Through the feet region in the image: its rows over the region's columns.
-      const Eigen::Vector2d& pa = l.start_px.x() <= l.end_px.x() ? l.start_px : l.end_px;
-      const Eigen::Vector2d& pb = l.start_px.x() <= l.end_px.x() ? l.end_px : l.start_px;
-      const double x0 = std::max<double>(pa.x(), x_left), x1 = std::min<double>(pb.x(), x_right);
-      if (x0 > x1) continue;
-      const auto rowAt = [&](double x) {
-        return pb.x() > pa.x() ? pa.y() + (x - pa.x()) * (pb.y() - pa.y()) / (pb.x() - pa.x()) : pa.y();
-      };
-      if (std::max(rowAt(x0), rowAt(x1)) < y_top || std::min(rowAt(x0), rowAt(x1)) > y_bottom) continue;
-      near_lines.push_back({l.start_in_robot, u, length});
-    }
-    if (field.centre_circle) {
-      const Eigen::Vector2d radial = *feet_ground - field.centre_circle->centre_in_robot;
-      const double r = radial.norm();
-      // Within the lines generator's reach of the feet point, its tangent there across the line
-      // of sight.
-      const double reach = p.line_max_feet_distance_m + line_half_width_m_;
-      if (std::abs(r - centre_circle_radius_m_) <= reach && r > 0 &&
-          std::abs(Eigen::Vector2d(-radial.y(), radial.x()).dot(sight)) / r <= max_cos) {
-        near_circle = field.centre_circle->centre_in_robot;
-      }
-    }
-  }
-  // A hit on such a line: its ground point within the line's half width, grown by the margin's
-  // pixels on the ground there (a pixel's depth), of the line's middle.
+  const FieldMarkingsAtFeet markings(p, field, camera, feet_ground, x_left, x_right, y_top, y_bottom,
+                                     line_half_width_m_, centre_circle_radius_m_);
   const auto onFieldLine = [&](const Hit& hit) {
-    if (near_lines.empty() && !near_circle) return false;
-    const double x = scan_x[hit.column] + 0.5, y = hit.row + 0.5;
-    const auto g = camera.pixelToGround({x, y});
-    const auto g_above = camera.pixelToGround({x, y - 1});
-    if (!g || !g_above) return false;
-    const double band = line_half_width_m_ + p.field_line_margin_px * (*g - *g_above).norm();
-    for (const GroundLine& l : near_lines) {
-      const Eigen::Vector2d q = *g - l.a;
-      const double along = q.dot(l.u);
-      if (along >= -band && along <= l.length + band && std::abs(q.x() * l.u.y() - q.y() * l.u.x()) <= band) {
-        return true;
-      }
-    }
-    return near_circle && std::abs((*g - *near_circle).norm() - centre_circle_radius_m_) <= band;
+    return markings.covers(camera, {scan_x[hit.column] + 0.5, hit.row + 0.5});
   };
   for (int c = 0; c < columns; ++c) {
     first_hit.push_back(static_cast<int>(hits.size()));
