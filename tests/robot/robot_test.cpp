@@ -2059,10 +2059,10 @@ TEST(LinesGenerator, MovesBelowAHeelPanelToTheGround) {
 }
 
 // The shoe in shade (gray 100 on carpet of 80) with a thin white rim over the panel (directional
-// or uneven light on a back view): the shoe-to-panel step is too weak, and the rim-to-panel edge answers on one row
-// only. With a panel right below, one row is edge enough (dark_panel_edge_min_rows): the
-// silhouette is the face's ground edge. Asking two rows there (the rule for other edges), no
-// silhouette point lies on the ground edge.
+// or uneven light on a back view): the shoe-to-panel step is too weak, and the rim-to-panel edge
+// answers on one row only. With a panel right below, one row is edge enough
+// (dark_panel_edge_min_rows): the silhouette is the face's ground edge. Asking two rows there (the
+// rule for other edges), no silhouette point lies on the ground edge.
 TEST(LinesGenerator, AThinRimOverAHeelPanelIsItsEdge) {
   const CameraModel cam = testCamera();
   for (const double yaw_deg : {0.0, 20.0, -25.0}) {
