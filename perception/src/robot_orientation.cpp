@@ -2,12 +2,12 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <numbers>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <numbers>
 
 #include "colorfree/perception/cnn/patch.h"
 #include "colorfree/perception/cnn/shipped_nets.h"
@@ -466,11 +466,7 @@ class FieldMarkingsAtFeet {
     if (!g || !g_above) return false;
     const double band = half_width_m_ + margin_px_ * (*g - *g_above).norm();
     for (const GroundLine& l : lines_) {
-      const Eigen::Vector2d q = *g - l.a;
-      const double along = q.dot(l.u);
-      if (along >= -band && along <= l.length + band && std::abs(q.x() * l.u.y() - q.y() * l.u.x()) <= band) {
-        return true;
-      }
+      if (nearSegment(l.a, l.u, l.length, *g, band, band)) return true;
     }
     return circle_centre_ && std::abs((*g - *circle_centre_).norm() - circle_radius_m_) <= band;
   }
@@ -644,12 +640,13 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   }
   int open = columns;
   const auto mask_row = [&](int r) { return &majority[static_cast<std::size_t>(r) * words]; };
-  // The rows above a run's top whose mean the edge test takes, and the least passing sum there.
+  // A run's top row, the rows above it whose mean the edge test takes and the least passing sum.
   struct AboveTest {
-    int n = 0, min_sum = 0;
+    int top_y = 0, n = 0, min_sum = 0;
   };
   const auto aboveTest = [&](int top_y) {
     AboveTest t;
+    t.top_y = top_y;
     t.n = min_above_gray > 0 ? std::min(above_rows, top_y) : 0;
     t.min_sum = min_above_gray > 0 ? min_above_sum[t.n] : 0;
     return t;
@@ -675,9 +672,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
         const bool is_long = (long_run >> bit) & 1;
         if (!is_long && belowDarkPanel(image, scan_x[c], y, panel) == y) continue;
         const AboveTest& t = is_long ? long_test : short_test;
-        const int top_y = is_long ? y - m + 1 : y - panel_m + 1;
         int sum = 0;
-        for (int i = 0; i < t.n; ++i) sum += image.row(top_y - 1 - i)[scan_x[c]];
+        for (int i = 0; i < t.n; ++i) sum += image.row(t.top_y - 1 - i)[scan_x[c]];
         // A start that fails the test writes its hit where the column's next one goes, and the
         // count does not move.
         column_hits[static_cast<std::size_t>(c) * kMaxHits + found[c]] = {c, y};

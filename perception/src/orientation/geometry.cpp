@@ -43,12 +43,7 @@ int countLineVotes(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
   if (length <= 0) return 0;
   const Eigen::Vector2d u = d / length;
   int votes = 0;
-  for (const auto& p : points) {
-    const Eigen::Vector2d ap = p - a;
-    const double along = ap.dot(u);
-    const double across = std::abs(ap.x() * u.y() - ap.y() * u.x());
-    if (across <= max_distance && along >= -margin && along <= length + margin) ++votes;
-  }
+  for (const auto& p : points) votes += nearSegment(a, u, length, p, max_distance, margin);
   return votes;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -20,6 +21,16 @@ struct LineHypothesis {
   double length() const { return (b - a).norm(); }
   Eigen::Vector2d direction() const { return (b - a).normalized(); }
 };
+
+/// Whether `p` lies within `max_distance` of the line through `a` along the unit direction `u` and
+/// projects within [-margin, length + margin] along it (the segment a .. a + length·u, extended).
+inline bool nearSegment(const Eigen::Vector2d& a, const Eigen::Vector2d& u, double length,
+                        const Eigen::Vector2d& p, double max_distance, double margin) {
+  const Eigen::Vector2d ap = p - a;
+  const double along = ap.dot(u);
+  const double across = std::abs(ap.x() * u.y() - ap.y() * u.x());
+  return across <= max_distance && along >= -margin && along <= length + margin;
+}
 
 /// Votes for the line through `a` and `b`: the number of `points` within `max_distance` of the
 /// segment's infinite line whose projection falls within the segment extended by `margin` at
