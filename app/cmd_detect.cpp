@@ -29,13 +29,6 @@ const char* typeName(IntersectionType t) {
 
 nlohmann::json vec(const Eigen::Vector2d& v) { return {v.x(), v.y()}; }
 
-// The frame's detected field lines and features (none when that stage did not run), as the
-// pipeline gives them to the orientation stage.
-const FieldFeatures& fieldFeatures(const Frame& frame) {
-  static const FieldFeatures kNoFeatures;
-  return frame.field_lines ? frame.field_lines->features : kNoFeatures;
-}
-
 nlohmann::json toJson(const Frame& frame, const PipelineStats& stats) {
   nlohmann::json j;
   j["width"] = frame.image.width;
@@ -194,7 +187,8 @@ nlohmann::json robotsJson(const Frame& frame, const PipelineConfig& config) {
       o["orientation_deg"] = r.orientation_raw->angle_rad * 180 / 3.14159265358979;
       o["facing_known"] = r.orientation_raw->facing_known;
     }
-    o["orientation_lines"] = orientationLinesJson(ori.estimate(frame.image, frame.camera, r, fieldFeatures(frame)));
+    o["orientation_lines"] =
+        orientationLinesJson(ori.estimate(frame.image, frame.camera, r, frame.fieldFeatures()));
     j.push_back(o);
   }
   return j;
@@ -297,7 +291,7 @@ void drawAnnotated(const std::string& path, const Frame& frame, const PipelineCo
     // left or right; grey: rejected).
     const RobotOrientationEstimator ori = orientationEstimator(config);
     for (const auto& r : *frame.robot_percepts) {
-      const RobotLines lines = ori.estimate(frame.image, frame.camera, r, fieldFeatures(frame));
+      const RobotLines lines = ori.estimate(frame.image, frame.camera, r, frame.fieldFeatures());
       for (const auto& q : lines.silhouette_px) cv::circle(img, pt(q), 0, {0, 255, 0}, -1);
       for (const auto& region : lines.regions) {
         const auto a = frame.camera.robotToPixel({region.line_in_robot.a.x(), region.line_in_robot.a.y(), 0});

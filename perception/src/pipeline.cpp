@@ -194,10 +194,8 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
     if (stats) stats->add(Stage::kRobotDetector, robot_detector_ms);
     timed(stats, Stage::kRobotOrientation, [&] {
       RobotTracks this_frame_only;
-      static const FieldFeatures kNoFeatures;
       robot_orientation_->run(image, frame.camera, *frame.robot_percepts,
-                              tracks ? *tracks : this_frame_only, frame.time_s,
-                              frame.field_lines ? frame.field_lines->features : kNoFeatures);
+                              tracks ? *tracks : this_frame_only, frame.time_s, frame.fieldFeatures());
     });
   }
 }

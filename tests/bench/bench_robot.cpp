@@ -90,7 +90,7 @@ void bmRobotOrientation(benchmark::State& state) {
   double t = 0;
   // The frame's field lines and features, as the pipeline gives them (the stage drops their edges
   // near feet).
-  const FieldFeatures field = f.frame->field_lines ? f.frame->field_lines->features : FieldFeatures{};
+  const FieldFeatures& field = f.frame->fieldFeatures();
   for (auto _ : state) {
     std::vector<RobotPercept> robots = f.robots;
     f.orientation.run(f.frame->image, f.frame->camera, robots, tracks, t, field);

@@ -47,6 +47,13 @@ struct Frame {
   /// The ball cascade's decision per proposal (same order as ball_proposals).
   std::optional<std::vector<BallDecision>> ball_decisions;
 
+  /// The detected field lines and features, or none when the field lines stage did not run (as
+  /// the orientation stage is given them).
+  const FieldFeatures& fieldFeatures() const {
+    static const FieldFeatures kNone;
+    return field_lines ? field_lines->features : kNone;
+  }
+
   Frame(GrayView image_in, CameraModel camera_in)
       : image(image_in), camera(std::move(camera_in)) {}
 };
