@@ -48,6 +48,7 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.min_gradient = f.getInRange("min_gradient", 0, 255);
   p.centre_ridge_fraction = f.getInRange("centre_ridge_fraction", 0, 1);
   p.centre_ridge_min_radius_px = f.getInRange("centre_ridge_min_radius_px", 0, 500);
+  p.smear_surround_fraction = f.getInRange("smear_surround_fraction", 0, 2);
   f.finish();
   if (p.line_count > p.max_count) throw Error(path + ": line_count must not exceed max_count");
   if (p.max_radius_px <= p.min_radius_px) {
@@ -180,16 +181,21 @@ std::optional<double> expectedRadius(const CameraModel& camera, const BallPropos
 
 // The filter's sizes at one expected radius (the same along a scan row).
 struct Scale {
-  int a, b;            // centre and surround box half-sides, pixels
+  int a;               // centre box half-side, pixels
+  int bx, by;          // surround box half-width and half-height, pixels
   float texture_gain;  // texture_weight × (r / reference) ^ exponent
   float edge_floor;    // the frame's noise's share of the mean edge strength (texture_noise_factor × noise)
 };
 
-Scale scaleAt(double r, const BallProposerParams& p, float edge_floor) {
+// `widen_px`: the surround's growth in x and y (the camera's exposure smear draws the ball out
+// over the left and right or the upper and lower cells of a square one).
+Scale scaleAt(double r, const BallProposerParams& p, float edge_floor, const Eigen::Vector2i& widen_px) {
   Scale s;
   s.edge_floor = edge_floor;
   s.a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
-  s.b = std::max(s.a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
+  const int b = std::max(s.a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
+  s.bx = b + widen_px.x();
+  s.by = b + widen_px.y();
   // In float, as it is used (powf is some three times faster than pow, and this runs per scan row).
   s.texture_gain = static_cast<float>(p.texture_weight) *
                    std::pow(static_cast<float>(r / p.texture_reference_radius_px),
@@ -199,9 +205,9 @@ Scale scaleAt(double r, const BallProposerParams& p, float edge_floor) {
 
 float response(const Integrals& ii, int x, int y, const Scale& sc, const BallProposerParams& p,
                float* on_line = nullptr) {
-  const int a = sc.a, b = sc.b;
-  const int xs[4] = {ii.clampX(x - b), ii.clampX(x - a), ii.clampX(x + a), ii.clampX(x + b)};
-  const int ys[4] = {ii.clampY(y - b), ii.clampY(y - a), ii.clampY(y + a), ii.clampY(y + b)};
+  const int a = sc.a, bx = sc.bx, by = sc.by;
+  const int xs[4] = {ii.clampX(x - bx), ii.clampX(x - a), ii.clampX(x + a), ii.clampX(x + bx)};
+  const int ys[4] = {ii.clampY(y - by), ii.clampY(y - a), ii.clampY(y + a), ii.clampY(y + by)};
   const int cols[4] = {ii.col(xs[0]), ii.col(xs[1]), ii.col(xs[2]), ii.col(xs[3])};
   const std::uint32_t* rows[4] = {ii.row(ys[0]), ii.row(ys[1]), ii.row(ys[2]), ii.row(ys[3])};
   std::uint32_t v[4][4];
@@ -279,24 +285,24 @@ float response(const Integrals& ii, int x, int y, const Scale& sc, const BallPro
 // response() where no box needs clamping (every box of the row inside the region): the same
 // arithmetic, with the row's four integral rows and the cells' areas prepared once per scan row.
 struct RowBoxes {
-  const std::uint32_t* rows[4];  // integral rows at y - b, y - a, y + a, y + b
-  int da, db;                    // 2 a, 2 b: the boxes' offsets in interleaved entries
+  const std::uint32_t* rows[4];  // integral rows at y - by, y - a, y + a, y + by
+  int da, db;                    // 2 a, 2 bx: the boxes' offsets in interleaved entries
   float area[9];                 // the 3x3 cells, row-major
   float ring_area, inner_area;
 };
 
 RowBoxes rowBoxes(const Integrals& ii, int y, const Scale& sc) {
   RowBoxes g;
-  const int a = sc.a, b = sc.b;
-  const int ys[4] = {y - b, y - a, y + a, y + b};
+  const int a = sc.a, bx = sc.bx, by = sc.by;
+  const int ys[4] = {y - by, y - a, y + a, y + by};
   for (int j = 0; j < 4; ++j) g.rows[j] = ii.row(ys[j]);
   g.da = 2 * a;
-  g.db = 2 * b;
-  const int side[3] = {b - a, 2 * a, b - a};
+  g.db = 2 * bx;
+  const int width[3] = {bx - a, 2 * a, bx - a}, height[3] = {by - a, 2 * a, by - a};
   for (int j = 0; j < 3; ++j) {
-    for (int i = 0; i < 3; ++i) g.area[3 * j + i] = static_cast<float>(side[i] * side[j]);
+    for (int i = 0; i < 3; ++i) g.area[3 * j + i] = static_cast<float>(width[i] * height[j]);
   }
-  g.ring_area = static_cast<float>((2 * b) * (2 * b) - (2 * a) * (2 * a));
+  g.ring_area = static_cast<float>((2 * bx) * (2 * by) - (2 * a) * (2 * a));
   g.inner_area = static_cast<float>((2 * a) * (2 * a));
   return g;
 }
@@ -657,6 +663,12 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   }
   if (rects.empty()) return {};
 
+  // The camera's own turn over the exposure draws a ball out by its smear: the part beyond the
+  // ball's disc, up to half the smear each way, falls into the surround's cells along it and lights
+  // them like a line through the ball. The surround widens by smear_surround_fraction of half the
+  // smear, in x and y apart; the centre box stays (the smear's middle keeps the ball's full grey).
+  const Eigen::Vector2i widen =
+      (p.smear_surround_fraction * camera.exposureSmearPx().cwiseAbs() / 2).array().round().cast<int>();
   // Expected radius at the top and bottom of every rectangle (interpolated in between).
   struct RectRadius {
     std::optional<double> top, bottom;
@@ -670,7 +682,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
     radii[k].bottom = expectedRadius(camera, p, {cx, rc.y1 - 0.5}, p.ball_radius_m);
     const double rmax = std::min(p.max_radius_px, std::max({p.min_radius_px, radii[k].top.value_or(0),
                                                             radii[k].bottom.value_or(0)}));
-    const int margin = static_cast<int>(std::ceil(p.outer_fraction * rmax)) + 2;
+    const int margin = static_cast<int>(std::ceil(p.outer_fraction * rmax)) + widen.maxCoeff() + 2;
     rx0 = std::min(rx0, rc.x0 - margin);
     ry0 = std::min(ry0, rc.y0 - margin);
     rx1 = std::max(rx1, rc.x1 + margin);
@@ -706,7 +718,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       }
       const double r = *rad;
       const int step = std::max(1, static_cast<int>(p.step_fraction * r));
-      const Scale scale = scaleAt(r, p, edge_floor);
+      const Scale scale = scaleAt(r, p, edge_floor, widen);
       // The first position half a step in; a step wider than the rectangle (a 16-px window and
       // an expected radius of 66 px or more) would leave it out: one evaluation at its middle
       // instead, so the grid of the largest radii is the windows' grid.
@@ -715,8 +727,8 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       const int yy = coarse && y == rc.y0 ? (rc.y0 + rc.y1) / 2
                                           : std::min(y + (step - 1) / 2, rc.y1 - 1);
       // No box of this row needs clamping: the fast path (the print term needs the general one).
-      const bool inside = p.print_weight <= 0 && x_start - scale.b >= rx0 && rc.x1 - 1 + scale.b <= rx1 &&
-                          yy - scale.b >= ry0 && yy + scale.b <= ry1;
+      const bool inside = p.print_weight <= 0 && x_start - scale.bx >= rx0 && rc.x1 - 1 + scale.bx <= rx1 &&
+                          yy - scale.by >= ry0 && yy + scale.by <= ry1;
       const float boost = static_cast<float>(rc.boost);
       // The centre box's mean carries the frame's noise over its (2 a)^2 pixels: responses count
       // net of response_noise_factor such deviations (0 without noise: x - 0 is x).

@@ -98,6 +98,10 @@ struct BallProposerParams {
   /// radius) is a few one-pixel cells, too small for a smear's ridge, and the centroid only moves a
   /// far ball's proposal by noise.
   double centre_ridge_min_radius_px = 6.0;
+  /// The camera's exposure smear (CameraModel::exposureSmearPx: its own turn over the exposure)
+  /// draws a ball out along it, into the surround's cells: the surround box widens by this
+  /// fraction of half the smear each way, in x and in y apart (0: square whatever the smear).
+  double smear_surround_fraction = 0.5;
 
   bool operator==(const BallProposerParams&) const = default;
   static BallProposerParams load(const std::string& path);
