@@ -189,7 +189,8 @@ struct Scale {
 
 // `widen_px`: the surround's growth in x and y (the camera's exposure smear draws the ball out
 // over the left and right or the upper and lower cells of a square one).
-Scale scaleAt(double r, const BallProposerParams& p, float edge_floor, const Eigen::Vector2i& widen_px) {
+Scale scaleAt(double r, const BallProposerParams& p, float edge_floor,
+              const Eigen::Vector2i& widen_px) {
   Scale s;
   s.edge_floor = edge_floor;
   s.a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
@@ -727,8 +728,9 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       const int yy = coarse && y == rc.y0 ? (rc.y0 + rc.y1) / 2
                                           : std::min(y + (step - 1) / 2, rc.y1 - 1);
       // No box of this row needs clamping: the fast path (the print term needs the general one).
-      const bool inside = p.print_weight <= 0 && x_start - scale.bx >= rx0 && rc.x1 - 1 + scale.bx <= rx1 &&
-                          yy - scale.by >= ry0 && yy + scale.by <= ry1;
+      const bool inside = p.print_weight <= 0 && x_start - scale.bx >= rx0 &&
+                          rc.x1 - 1 + scale.bx <= rx1 && yy - scale.by >= ry0 &&
+                          yy + scale.by <= ry1;
       const float boost = static_cast<float>(rc.boost);
       // The centre box's mean carries the frame's noise over its (2 a)^2 pixels: responses count
       // net of response_noise_factor such deviations (0 without noise: x - 0 is x).

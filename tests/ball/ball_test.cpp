@@ -492,9 +492,9 @@ TEST(BallProposer, SmearedBallProposedAtItsCentre) {
 }
 
 // The smear lights the square surround's left and right cells: with the camera's smear known, the
-// surround widens along it and the ball smeared by 1.5 radii responds more strongly than in a square
-// surround (71.0 against 65.7 at 1 m, 64.5 against 60.6 at 1.5 m) or in one widened across the smear
-// (66.1, 62.1: x and y swapped); without a smear in the camera model nothing changes.
+// surround widens along it and the ball smeared by 1.5 radii responds more strongly than in a
+// square surround (71.0 against 65.7 at 1 m, 64.5 against 60.6 at 1.5 m) or in one widened across
+// the smear (66.1, 62.1: x and y swapped); without a smear in the camera model nothing changes.
 TEST(BallProposer, SurroundWidensAlongTheCamerasSmear) {
   const BallProposerParams shipped = BallProposerParams::loadDefault();
   ASSERT_GT(shipped.smear_surround_fraction, 0);
