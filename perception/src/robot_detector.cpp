@@ -47,6 +47,8 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.feet_min_confidence = f.getInRange("feet_min_confidence", 0.5, 1);  // one class at most
   p.feet_step_height_fraction = f.getInRange("feet_step_height_fraction", 0.01, 0.5);
   p.feet_max_steps = static_cast<int>(f.getInRange("feet_max_steps", 0, 10));
+  p.feet_search_min_confidence = f.getInRange("feet_search_min_confidence", 0, 1);
+  p.feet_search_accept_confidence = f.getInRange("feet_search_accept_confidence", 0, 1);
   p.feet_to_centre_m = f.getInRange("feet_to_centre_m", 0, 0.3);
   p.ball_feet_radii = f.getInRange("ball_feet_radii", 0, 10);
   p.ball_feet_max_confidence = f.getInRange("ball_feet_max_confidence", 0, 1);
@@ -287,6 +289,48 @@ void RobotDetector::moveFeet(const GrayView& image, const CameraModel& camera,
   }
 }
 
+void RobotDetector::searchFeet(const GrayView& image, const CameraModel& camera,
+                               std::vector<RobotProposal>& boxes, std::size_t count,
+                               std::vector<float>& robot, std::vector<float>& patches,
+                               std::vector<bool>& searched) const {
+  if (!feet_net_ || params_.feet_max_steps <= 0 ||
+      params_.feet_search_min_confidence >= params_.min_confidence) {
+    return;
+  }
+  std::vector<int> which;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (robot[i] >= params_.feet_search_min_confidence && robot[i] < params_.min_confidence &&
+        !boxes[i].wide_group && insideRows(boxes[i].box, image)) {
+      which.push_back(static_cast<int>(i));
+    }
+  }
+  std::vector<RobotProposal> moved = boxes;
+  moveFeet(image, camera, moved, which, patches);
+  std::vector<int> changed;
+  std::vector<RobotProposal> looks;
+  for (int i : which) {
+    if (moved[i].feet_px == boxes[i].feet_px) continue;
+    changed.push_back(i);
+    looks.push_back(moved[i]);
+  }
+  if (changed.empty()) return;
+  const std::size_t n = static_cast<std::size_t>(net_.input().size());
+  std::vector<float> inputs(changed.size() * n);
+  for (std::size_t k = 0; k < changed.size(); ++k) {
+    net_.extract(image, robotPatchBox(looks[k]), inputs.data() + k * n);
+  }
+  std::vector<float> scores;
+  score(image, looks.data(), inputs.data(), looks.size(), scores);
+  for (std::size_t k = 0; k < changed.size(); ++k) {
+    if (scores[k] < params_.feet_search_accept_confidence) continue;
+    const int i = changed[k];
+    boxes[i] = looks[k];
+    robot[i] = scores[k];
+    searched[i] = true;
+    std::copy_n(inputs.data() + k * n, n, patches.data() + i * n);
+  }
+}
+
 std::optional<RobotPercept> feetOnShins(const GrayView& image, const CameraModel& camera,
                                         const RobotPercept& percept,
                                         const RobotDetectorParams& params,
@@ -476,6 +520,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     }
   }
   classify(robot.size());
+  std::vector<bool> searched(seen.size(), false);
+  searchFeet(image, camera, seen, proposals.size(), robot, patches, searched);
   std::vector<PixelBox> proposal_boxes;
   proposal_boxes.reserve(seen.size());
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
@@ -522,7 +568,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   if (feet_net_ && params_.feet_max_steps > 0) {
     std::vector<int> which;
     for (std::size_t i = 0; i < seen.size(); ++i) {
-      if (accepted[i] <= 0 || !insideRows(seen[i].box, image)) continue;
+      if (accepted[i] <= 0 || searched[i] || !insideRows(seen[i].box, image)) continue;
       const Eigen::Vector2d& f = seen[i].feet_px;
       bool hidden = false;
       for (std::size_t k = 0; k < seen.size() && !hidden; ++k) {
@@ -552,10 +598,23 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       for (int k : standing) {
         behind |= feetInLowerPart(placed[i].feet_px, placed[k], params_.behind_lower_part_fraction);
       }
-      if (behind && accepted[i] < params_.min_behind_robot_confidence) {
+      if (behind && (accepted[i] < params_.min_behind_robot_confidence || searched[i])) {
         accepted[i] = 0;
       } else {
         standing.push_back(i);
+      }
+    }
+  }
+  // A box kept by the feet search yields to a box accepted at its first look that overlaps it or
+  // holds it (the search took that robot's hand or knee down to its feet).
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    if (!searched[i] || accepted[i] <= 0) continue;
+    for (std::size_t k = 0; k < seen.size() && accepted[i] > 0; ++k) {
+      if (k != i && !searched[k] && accepted[k] > 0 &&
+          (boxIou(proposal_boxes[k], proposal_boxes[i]) > params_.max_overlap_iou ||
+           boxInsideFraction(proposal_boxes[i], proposal_boxes[k]) >=
+               params_.max_inside_fraction)) {
+        accepted[i] = 0;
       }
     }
   }

@@ -1177,6 +1177,64 @@ TEST(RobotDetector, FeetNetMovesAnAcceptedBoxToTheRobotsFeet) {
       RobotDetector(params, cnn::Classifier(brightness), dims, cnn::Classifier(brightness)), Error);
 }
 
+// A robot proposed at its knees (its shaded legs at the carpet's gray): RobotNet rejects the box
+// too high; RobotFeetNet moves it down to the feet, where RobotNet accepts it from the search's
+// bar. The stand-in RobotNet reads the patch's lower rows as feetStandIn does: robot logit
+// 20 C - 20 B - 1 (C rows 21-22, B row 23): a box whose bottom rows are all robot (too high) scores
+// 0.27, one whose feet end above its bottom row (at the feet) about 1.
+TEST(RobotDetector, FeetSearchMovesARejectedBoxToTheRobotsFeet) {
+  const CameraModel cam = testCamera();
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  const Eigen::Vector2d feet(320, 330);
+  const double h = *cam.robotHeightPx(feet, dims.robot_height_m);
+  GrayImage img = carpet(21);
+  cv::rectangle(wrap(img), cv::Point(int(320 - 0.25 * h), int(330 - h)),
+                cv::Point(int(320 + 0.25 * h), 329), cv::Scalar(230), cv::FILLED);
+  cnn::Net lower_rows = cnn::parseDarknetCfg(
+      "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
+      "[convolutional]\nfilters=2\nsize=24\nstride=1\nactivation=linear\n\n[avgpool]\n\n"
+      "[softmax]\n",
+      "lower rows net");
+  std::vector<float>& w = lower_rows.params();
+  ASSERT_EQ(w.size(), 2u + 2u * 576u);
+  std::fill(w.begin(), w.end(), 0.0f);
+  w[1] = -1;
+  for (int col = 0; col < 24; ++col) {
+    for (int row : {21, 22}) w[2 + 576 + row * 24 + col] = 20.0f / 48;
+    w[2 + 576 + 23 * 24 + col] = -20.0f / 24;
+  }
+  const RobotProposal high = proposerShapedBox(cam, feet + Eigen::Vector2d(0, -0.2 * h));
+  RobotDetectorParams params;
+  params.shin_gap_height_fraction = 0;  // the feet net alone
+  params.feet_search_min_confidence = 0.1;
+  params.feet_search_accept_confidence = 0.97;
+  const auto robots = RobotDetector(params, cnn::Classifier(lower_rows), dims, feetStandIn())
+                          .run(img.view(), cam, {high});
+  ASSERT_EQ(robots.size(), 1u);
+  EXPECT_NEAR(robots[0].feet_px.y(), 330, 0.06 * h);
+  EXPECT_GE(robots[0].confidence, 0.97f);
+  // A box accepted at its first look, at the feet but off to the side (less sure than the searched
+  // box, centred), takes the robot: the searched box yields.
+  const RobotProposal aside = proposerShapedBox(cam, feet + Eigen::Vector2d(0.15 * h, 0));
+  std::vector<float> confidences;
+  const auto both = RobotDetector(params, cnn::Classifier(lower_rows), dims, feetStandIn())
+                        .run(img.view(), cam, {high, aside}, &confidences);
+  ASSERT_EQ(confidences.size(), 2u);
+  EXPECT_GT(confidences[0], confidences[1]);
+  EXPECT_GE(confidences[1], params.min_confidence);
+  ASSERT_EQ(both.size(), 1u);
+  EXPECT_EQ(both[0].feet_px.x(), aside.feet_px.x());
+  // Off, over the first look's score (0.27), or the moved look under the bar: nothing.
+  for (const auto& [floor, bar] : {std::pair{0.5, 0.97}, {0.3, 0.97}, {0.1, 1.0}}) {
+    params.feet_search_min_confidence = floor;
+    params.feet_search_accept_confidence = bar;
+    SCOPED_TRACE(std::to_string(floor) + " " + std::to_string(bar));
+    EXPECT_TRUE(RobotDetector(params, cnn::Classifier(lower_rows), dims, feetStandIn())
+                    .run(img.view(), cam, {high})
+                    .empty());
+  }
+}
+
 TEST(RobotDetector, AnUnsureBoxIsScoredByTheMeanOfItsLookAndItsMirroredLook) {
   // A box bright on its left half only, and a stand-in net that tells left from right: its robot
   // logit is beta + a x (the left half's mean - the right half's) / 2 of the patch (unit range).

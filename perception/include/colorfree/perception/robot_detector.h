@@ -102,6 +102,15 @@ struct RobotDetectorParams {
   double feet_min_confidence = 0.6;
   double feet_step_height_fraction = 0.05;
   int feet_max_steps = 6;
+  /// A proposal RobotNet scores from feet_search_min_confidence to under min_confidence (not a
+  /// wide group's piece) is moved to its robot's feet by RobotFeetNet as an accepted box is, and
+  /// looked at there: from feet_search_accept_confidence it stays at its new place (a robot whose
+  /// shaded legs the carpet's gray hides, proposed at its knees). Such a box is not moved again;
+  /// it goes where its feet then lie in a nearer accepted box's lower part (that robot's leg), and
+  /// it yields to a box accepted at its first look that overlaps it (IoU over max_overlap_iou) or
+  /// holds it (max_inside_fraction). feet_search_min_confidence >= min_confidence: never.
+  double feet_search_min_confidence = 0.05;
+  double feet_search_accept_confidence = 0.97;
   /// The robot's ground point (between its feet: the pose's position) lies this far beyond its
   /// feet point, the nearest edge of its feet in the image, along the line of sight (m).
   double feet_to_centre_m = 0.07;
@@ -204,6 +213,13 @@ class RobotDetector {
   /// RobotNet inputs in `patches`, all in one batch.
   void shiftWidePieces(const GrayView& image, std::vector<RobotProposal>& boxes, std::size_t count,
                        std::vector<float>& robot, std::vector<float>& patches) const;
+  /// The first `count` of `boxes` RobotNet rejected but not far below min_confidence, moved to
+  /// their robots' feet and looked at again (see feet_search_min_confidence): those kept at their
+  /// new places, with their scores in `robot` and their RobotNet inputs in `patches`, are marked in
+  /// `searched`.
+  void searchFeet(const GrayView& image, const CameraModel& camera,
+                  std::vector<RobotProposal>& boxes, std::size_t count, std::vector<float>& robot,
+                  std::vector<float>& patches, std::vector<bool>& searched) const;
 
   RobotDetectorParams params_;
   cnn::Classifier net_;
