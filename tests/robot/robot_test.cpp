@@ -1057,15 +1057,22 @@ TEST(RobotDetector, ARobotBehindAnAcceptedOneIsKeptOnlyWhenSureAndHoldingNoOther
 // lower" when its bottom row (B, row 23) is bright, "feet higher" when the two rows above it (C,
 // rows 21-22) are dark, "right" when C is bright and B dark: logits 20 C - 20 B - 5, 20 B - 10,
 // 10 - 20 C. With `always_lower`, "feet lower" whatever the patch.
-cnn::Classifier feetStandIn(bool always_lower = false) {
+// A net of one 24×24 convolution of `filters` filters over the whole patch (unit normalisation),
+// then softmax: filters biases, then filters × 576 weights (row-major), all zero.
+cnn::Net wholePatchNet(int filters, const std::string& name) {
   cnn::Net n = cnn::parseDarknetCfg(
       "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
-      "[convolutional]\nfilters=3\nsize=24\nstride=1\nactivation=linear\n\n[avgpool]\n\n"
-      "[softmax]\n",
-      "feet net");
+      "[convolutional]\nfilters=" + std::to_string(filters) +
+          "\nsize=24\nstride=1\nactivation=linear\n\n[avgpool]\n\n[softmax]\n",
+      name);
+  EXPECT_EQ(n.params().size(), static_cast<std::size_t>(filters) * (1 + 576));
+  std::fill(n.params().begin(), n.params().end(), 0.0f);
+  return n;
+}
+
+cnn::Classifier feetStandIn(bool always_lower = false) {
+  cnn::Net n = wholePatchNet(3, "feet net");
   std::vector<float>& w = n.params();
-  EXPECT_EQ(w.size(), 3u + 3u * 576u);
-  std::fill(w.begin(), w.end(), 0.0f);
   if (always_lower) {
     w[1] = 10;
     return cnn::Classifier(std::move(n));
@@ -1125,15 +1132,21 @@ TEST(RobotDetector, FeetMovedGoesStepsOfTheHeightAndScalesTheBoxAboutTheFeet) {
   EXPECT_FALSE(feetMoved(proposerShapedBox(cam, {300, 300}), cam, 5, -1, dims));
 }
 
+// A bright robot h pixels tall and h / 2 wide standing on the carpet with its feet at `feet`.
+GrayImage brightRobot(const Eigen::Vector2d& feet, double h) {
+  GrayImage img = carpet(21);
+  cv::rectangle(wrap(img), cv::Point(int(feet.x() - 0.25 * h), int(feet.y() - h)),
+                cv::Point(int(feet.x() + 0.25 * h), int(feet.y()) - 1), cv::Scalar(230), cv::FILLED);
+  return img;
+}
+
 TEST(RobotDetector, FeetNetMovesAnAcceptedBoxToTheRobotsFeet) {
   // A bright robot on the carpet, its feet at row 330, as tall as the camera expects there.
   const CameraModel cam = testCamera();
   const FieldDimensions dims = FieldDimensions::loadDefault();
   const Eigen::Vector2d feet(320, 330);
   const double h = *cam.robotHeightPx(feet, dims.robot_height_m);
-  GrayImage img = carpet(21);
-  cv::rectangle(wrap(img), cv::Point(int(320 - 0.25 * h), int(330 - h)),
-                cv::Point(int(320 + 0.25 * h), 329), cv::Scalar(230), cv::FILLED);
+  const GrayImage img = brightRobot(feet, h);
   RobotDetectorParams params;  // 0.05 of the height a step, up to 6 steps, from 0.6
   params.feet_step_height_fraction = 0.05;
   params.feet_max_steps = 6;
@@ -1187,17 +1200,9 @@ TEST(RobotDetector, FeetSearchMovesARejectedBoxToTheRobotsFeet) {
   const FieldDimensions dims = FieldDimensions::loadDefault();
   const Eigen::Vector2d feet(320, 330);
   const double h = *cam.robotHeightPx(feet, dims.robot_height_m);
-  GrayImage img = carpet(21);
-  cv::rectangle(wrap(img), cv::Point(int(320 - 0.25 * h), int(330 - h)),
-                cv::Point(int(320 + 0.25 * h), 329), cv::Scalar(230), cv::FILLED);
-  cnn::Net lower_rows = cnn::parseDarknetCfg(
-      "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
-      "[convolutional]\nfilters=2\nsize=24\nstride=1\nactivation=linear\n\n[avgpool]\n\n"
-      "[softmax]\n",
-      "lower rows net");
+  const GrayImage img = brightRobot(feet, h);
+  cnn::Net lower_rows = wholePatchNet(2, "lower rows net");
   std::vector<float>& w = lower_rows.params();
-  ASSERT_EQ(w.size(), 2u + 2u * 576u);
-  std::fill(w.begin(), w.end(), 0.0f);
   w[1] = -1;
   for (int col = 0; col < 24; ++col) {
     for (int row : {21, 22}) w[2 + 576 + row * 24 + col] = 20.0f / 48;
