@@ -668,8 +668,9 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   // ball's disc, up to half the smear each way, falls into the surround's cells along it and lights
   // them like a line through the ball. The surround widens by smear_surround_fraction of half the
   // smear, in x and y apart; the centre box stays (the smear's middle keeps the ball's full grey).
-  const Eigen::Vector2i widen =
-      (p.smear_surround_fraction * camera.exposureSmearPx().cwiseAbs() / 2).array().round().cast<int>();
+  const Eigen::Vector2d widen_px =
+      p.smear_surround_fraction * camera.exposureSmearPx().cwiseAbs() / 2;
+  const Eigen::Vector2i widen = widen_px.array().round().cast<int>();
   // Expected radius at the top and bottom of every rectangle (interpolated in between).
   struct RectRadius {
     std::optional<double> top, bottom;

@@ -1136,7 +1136,8 @@ TEST(RobotDetector, FeetMovedGoesStepsOfTheHeightAndScalesTheBoxAboutTheFeet) {
 GrayImage brightRobot(const Eigen::Vector2d& feet, double h) {
   GrayImage img = carpet(21);
   cv::rectangle(wrap(img), cv::Point(int(feet.x() - 0.25 * h), int(feet.y() - h)),
-                cv::Point(int(feet.x() + 0.25 * h), int(feet.y()) - 1), cv::Scalar(230), cv::FILLED);
+                cv::Point(int(feet.x() + 0.25 * h), int(feet.y()) - 1), cv::Scalar(230),
+                cv::FILLED);
   return img;
 }
 

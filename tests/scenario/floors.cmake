@@ -65,3 +65,17 @@ colorfree_floor_test(defocus_floor sweeps/lens_defocus.yaml 4
 # balls of frame 4 lost). One miss is the margin.
 colorfree_floor_test(ball_soft_floor ball_hard_soft.yaml 8
   "ball.detection_rate >= 0.97" "ball.false_positives_per_frame <= 0.03")
+
+# Ball smeared by the head's sweep over a 20 ms exposure with a rolling shutter, by the penalty mark
+# and the goal-area line (ball_hard_marks: 6 cases x 8 frames, 48 balls). Measured: detection 0.854,
+# proposal recall 0.938, no false positive (session 40: the proposals' surround widened along the
+# camera's smear; before it 0.833 and 0.917). One miss is the margin.
+colorfree_floor_test(ball_marks_floor ball_hard_marks.yaml 8
+  "ball.detection_rate >= 0.83" "ball.proposal_recall >= 0.91" "ball.false_positives_per_frame <= 0.03")
+
+# Four robots, some overlapping, normal and uneven light (robots_overlapping: 2 cases x 10 frames,
+# 52 robot-frames). Measured: detection 0.904, false positives 0.050 per frame (session 40: rejected
+# boxes' feet searched by RobotFeetNet; before it 0.885). One miss and one false positive are the
+# margin.
+colorfree_floor_test(robots_overlapping_floor robots/robots_overlapping.yaml 10
+  "robot.detection_rate >= 0.88" "robot.false_positives_per_frame <= 0.10")
