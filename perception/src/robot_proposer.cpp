@@ -25,6 +25,9 @@ RobotProposerParams RobotProposerParams::load(const std::string& path) {
   }
   p.lit_band_beside_width_factor = f.getInRange("lit_band_beside_width_factor", 0, 10);
   p.lit_band_height_fraction = f.getInRange("lit_band_height_fraction", 0, 1);
+  p.border_robot_min_width_factor = f.getInRange("border_robot_min_width_factor", 0, 10);
+  p.border_robot_rise_width_fraction = f.getInRange("border_robot_rise_width_fraction", 0, 10);
+  p.border_robot_jump_factor = f.getInRange("border_robot_jump_factor", 0, 20);
   p.max_gap_px = static_cast<int>(f.getInRange("max_gap_px", 0, 64));
   p.max_gap_height_fraction = f.getInRange("max_gap_height_fraction", 0, 1);
   p.feet_dark_height_fraction = f.getInRange("feet_dark_height_fraction", 0, 1);
@@ -370,6 +373,112 @@ GrayImage horizontalMean(const GrayView& image, int width) {
     cut_short(0, inner_lo);
     cut_short(inner_hi, n);
   }
+  return out;
+}
+
+// The proposal box of a robot `h` pixels tall whose feet are at feet_px.
+RobotProposal proposalAt(const RobotProposerParams& p, double width_per_height,
+                         const Eigen::Vector2d& feet_px, double h) {
+  RobotProposal rp;
+  rp.feet_px = feet_px;
+  const double bw = p.box_width_factor * (h * width_per_height);
+  rp.box.x0 = feet_px.x() - bw / 2;
+  rp.box.x1 = feet_px.x() + bw / 2;
+  rp.box.y1 = feet_px.y() + p.box_below_feet_fraction * h;
+  rp.box.y0 = rp.box.y1 - p.box_height_factor * h;
+  return rp;
+}
+
+// Robots nearer than the lowest ground row the image shows (their feet below it, the lower border
+// across their body): spans of the image's lowest row, on every column_step_px-th column, brighter
+// than the carpet beside them by border_robot_jump_factor jumps (min_jump, jump_ratio), gaps up to
+// join_gap_width_fraction of a robot's width, at least min_fill_fraction of them bright, wider than
+// border_robot_min_width_factor robots standing on that row, and unlike that carpet
+// border_robot_rise_width_fraction robot widths up too (a field line along the border ends lower).
+// Each is proposed as a robot whose box is as wide as the span, its feet below the image where a
+// robot is that wide. Only where the image's own border is the lowest row looked at (no own body).
+std::vector<RobotProposal> borderRobots(const GrayView& image, const IgnoreMask& ignore,
+                                        const CameraModel& camera, const RobotProposerParams& p,
+                                        double robot_height_m, double width_per_height,
+                                        double min_jump) {
+  std::vector<RobotProposal> out;
+  if (p.border_robot_min_width_factor <= 0) return out;
+  const int step = p.column_step_px, yb = image.height - 1;
+  const auto widthAt = [&](double x, double y) -> std::optional<double> {
+    const auto h = camera.robotHeightPx({x, y}, robot_height_m);
+    if (!h) return std::nullopt;
+    return *h * width_per_height;
+  };
+  const auto at = [&](int x, int y) { return static_cast<double>(image.row(y)[x]); };
+  int first = -1, last = -1, bright = 0;  // the span's first and last bright column, their count
+  double max_gap = 0;
+  const auto endSpan = [&] {
+    if (first < 0) return;
+    const double x0 = first, x1 = last + step, cx = (x0 + x1) / 2, wide = x1 - x0;
+    first = -1;
+    const auto w_border = widthAt(cx, image.height);
+    if (bright * step < p.min_fill_fraction * wide || !w_border ||
+        wide < p.border_robot_min_width_factor * *w_border) {
+      return;
+    }
+    // The feet row where a robot's box is as wide as the span: between the lowest row and where a
+    // robot's head leaves the camera's front (nearer robots there are wider).
+    const double w_needed = wide / p.box_width_factor;
+    double lo = image.height, hi = 8.0 * image.height;
+    while (hi - lo > 1 && !widthAt(cx, hi)) hi = (lo + hi) / 2;
+    const auto w_hi = widthAt(cx, hi);
+    if (!w_hi || *w_hi < w_needed) return;
+    while (hi - lo > 0.5) {
+      const double mid = (lo + hi) / 2;
+      const auto w_mid = widthAt(cx, mid);
+      (w_mid && *w_mid < w_needed ? lo : hi) = mid;
+    }
+    out.push_back(proposalAt(p, width_per_height, {cx, hi}, *widthAt(cx, hi) / width_per_height));
+  };
+  // A robot's width on the lowest row, taken every 16 px (it varies slowly).
+  std::optional<double> w;
+  for (int x = step / 2, w_next = 0; x < image.width; x += step) {
+    if (x >= w_next) {
+      w = widthAt(x + 0.5, image.height);
+      w_next = x + 16;
+    }
+    bool robot = false;
+    if (w && ignore.bottom_y[x] == image.height) {
+      const int side = static_cast<int>(std::lround(p.beside_width_factor * *w));
+      const int rise = static_cast<int>(std::lround(p.border_robot_rise_width_fraction * *w));
+      // The carpet beside: the lower median of the pixels one to three robot widths to the left
+      // and right (a near robot is wider than one: some of them lie on it).
+      double beside[6];
+      int n = 0;
+      for (int k = 1; k <= 3 && side > 0; ++k) {
+        for (const int xs : {x - k * side, x + k * side}) {
+          if (xs >= 0 && xs < image.width && ignore.looked(xs, yb)) {
+            beside[n++] = at(xs, yb);
+          }
+        }
+      }
+      const double v = at(x, yb);
+      double ref = v;
+      if (n > 0) {
+        std::nth_element(beside, beside + (n - 1) / 2, beside + n);
+        ref = std::min(v, beside[(n - 1) / 2]);
+      }
+      const double thr = std::max(min_jump, p.jump_ratio * ref);
+      robot = v - ref > p.border_robot_jump_factor * thr && yb - rise >= ignore.top_y[x] &&
+              std::abs(at(x, yb - rise) - ref) > thr;
+    }
+    if (first >= 0 && x - last > max_gap) endSpan();
+    if (robot) {
+      if (first < 0) {
+        first = x;
+        bright = 0;
+      }
+      last = x;
+      ++bright;
+      max_gap = std::max(2.0 * step, p.join_gap_width_fraction * *w);
+    }
+  }
+  endSpan();
   return out;
 }
 
@@ -750,14 +859,8 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
                         ? std::max(1, static_cast<int>(std::lround(w / w_expected)))
                         : 1;
       for (int i = 0; i < n; ++i) {
-        const double x = g.first_x + (i + 0.5) * w / n;
-        RobotProposal rp;
-        rp.feet_px = {x, static_cast<double>(feet_y)};
-        const double bw = p.box_width_factor * w_expected;
-        rp.box.x0 = x - bw / 2;
-        rp.box.x1 = x + bw / 2;
-        rp.box.y1 = feet_y + p.box_below_feet_fraction * *h;
-        rp.box.y0 = rp.box.y1 - p.box_height_factor * *h;
+        RobotProposal rp =
+            proposalAt(p, width_per_height, {g.first_x + (i + 0.5) * w / n, double(feet_y)}, *h);
         rp.wide_group = w > p.defer_width_factor * w_expected;
         candidates.push_back({rp, *h});
       }
@@ -769,6 +872,9 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
     return candidates;
   };
   const std::vector<Candidate> candidates = candidatesOf(feet, false);
+  // Robots nearer than the lowest ground row the image shows: they come last (below).
+  const std::vector<RobotProposal> border =
+      borderRobots(image, ignore, camera, p, robot_height_m_, width_per_height, min_jump);
   // A candidate overlapping a kept one by more than max_overlap_iou is dropped. One whose feet
   // point lies inside the lower part of nearer robots' boxes is their knee, hip or hand, or a
   // robot beside or behind them: it is held back for the detector, which classifies it only when
@@ -880,6 +986,20 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
     }
   }
   holdBackBehindLaterNearer(out, behind_from, behind_to, p.own_body_height_fraction);
+  // The robots whose body the lower border cuts, after all others (their boxes, reaching far below
+  // the image, hold no candidate back), under the cap; one overlapping a kept box is that box's.
+  for (const RobotProposal& b : border) {
+    bool overlap = false;
+    for (const RobotProposal& kept : out.proposals) {
+      overlap |= boxIou(kept.box, b.box) > p.max_overlap_iou;
+    }
+    if (!overlap && static_cast<int>(out.proposals.size()) < p.max_proposals) {
+      out.proposals.push_back(b);
+    } else if (keep_rejected) {
+      out.rejected.push_back(
+          {b.feet_px, overlap ? RobotRejectReason::kOverlap : RobotRejectReason::kTooMany});
+    }
+  }
   return out;
 }
 

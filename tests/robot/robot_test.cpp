@@ -276,6 +276,52 @@ TEST(RobotProposer, NearRobotWhoseFeetTheLowerBorderCutsStandsAtTheBorder) {
   EXPECT_FALSE(near_border(lowest)) << describe(lowest);
 }
 
+TEST(RobotProposer, RobotWhoseBodyTheLowerBorderCutsIsProposedWithItsFeetBelow) {
+  // A robot 0.45 m in front of a camera pitched 5 deg down (a top camera, the head level): the
+  // lower border cuts its body above the crotch, and no scan line reaches its legs. The lowest row
+  // shows a span brighter than the carpet, wider than any robot standing on that row: it is
+  // proposed as a robot as wide as the span, its feet below the image. A field line along the
+  // border, as wide but a stripe, is none; without the test the robot has no box that holds it.
+  CameraPose pose;
+  pose.height_m = 0.5;
+  pose.pitch_rad = 5 * std::numbers::pi / 180;
+  const CameraModel cam(CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * std::numbers::pi / 180),
+                        pose);
+  GrayImage img = carpet(41);
+  const Eigen::Vector2d feet = drawRobot(img, cam, {0.45, 0.05});
+  const auto [h, w] = robotSizePx(cam, feet);
+  ASSERT_GT(feet.y() - 0.37 * h, 480);  // the border cuts the body, not the legs
+  const double body_x0 = feet.x() - 0.45 * w, body_x1 = feet.x() + 0.45 * w;
+  const auto holds_body = [&](const RobotProposals& out) {
+    for (const RobotProposal& p : out.proposals) {
+      if (p.feet_px.y() > 480 && p.box.x0 <= body_x0 + 0.1 * w && p.box.x1 >= body_x1 - 0.1 * w &&
+          p.box.x1 - p.box.x0 <= 1.5 * (body_x1 - body_x0) && p.box.y0 <= feet.y() - 0.8 * h)
+        return true;
+    }
+    return false;
+  };
+  const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
+  RobotProposerParams params = RobotProposerParams::loadDefault();
+  ASSERT_GT(params.border_robot_min_width_factor, 0);
+  const auto run = [&](const GrayImage& image) {
+    return RobotProposer(params, FieldDimensions::loadDefault())
+        .run(image.view(), cam, all, HighContrastDetector().run(image.view(), all), true);
+  };
+  const RobotProposals out = run(img);
+  EXPECT_TRUE(holds_body(out)) << "feet " << feet.transpose() << " h " << h << describe(out);
+  // A field line along the lower border, as wide as the body: no box with its feet below.
+  GrayImage line = carpet(42);
+  cv::Mat m = wrap(line);
+  cv::rectangle(m, cv::Point(int(body_x0), 466), cv::Point(int(body_x1), 479), cv::Scalar(220),
+                cv::FILLED);
+  for (const RobotProposal& p : run(line).proposals) {
+    EXPECT_LE(p.feet_px.y(), 480) << describe(run(line));
+  }
+  params.border_robot_min_width_factor = 0;
+  const RobotProposals without = run(img);
+  EXPECT_FALSE(holds_body(without)) << describe(without);
+}
+
 TEST(RobotProposer, HandOfARobotBehindANearerOneIsHeldBackBehindIt) {
   // A at 0.9 m; B at 2 m behind A's right side (its feet in A's box, above A's knees: B's box
   // comes after the free-standing ones); B's hand out to the right of A's box, 0.22 of B's height

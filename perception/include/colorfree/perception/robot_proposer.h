@@ -118,6 +118,20 @@ struct RobotProposerParams {
   /// edge against the wall: rows of boxes, rarely robots) come after every other candidate under
   /// the cap, so they do not take the places of far robots.
   double defer_width_factor = 2.5;
+  /// A robot nearer than the lowest ground row the image shows (its feet below the image, the
+  /// lower border across its body): a span of the lowest row whose pixels are brighter than the
+  /// carpet beside them (the lower median of the pixels one to three robot widths left and right;
+  /// gaps up to join_gap_width_fraction of a robot's width, at least min_fill_fraction of the span
+  /// bright) wider than this many widths of a robot standing on that row. It is proposed as a
+  /// robot whose box is as wide as the span, its feet below the image where a robot is that wide,
+  /// after all other proposals. 0: no such proposals.
+  double border_robot_min_width_factor = 1.25;
+  /// ... whose pixels this many robot widths (of one standing on that row) above the lowest row
+  /// still differ from that carpet (a field line along the border ends lower).
+  double border_robot_rise_width_fraction = 0.3;
+  /// ... and brighter than that carpet by this many of the scan's jumps (a robot's white body is
+  /// far brighter; the carpet's own slope across the image, in bright light, is not).
+  double border_robot_jump_factor = 2;
   double box_width_factor = 1.25;   ///< proposed box width in expected robot widths
   double box_height_factor = 1.08;  ///< proposed box height in expected robot heights
   double box_below_feet_fraction = 0.04;  ///< box bottom below the feet, in expected heights
