@@ -131,7 +131,7 @@ struct RobotProposerParams {
   double border_robot_rise_width_fraction = 0.3;
   /// ... and brighter than that carpet by this many of the scan's jumps (a robot's white body is
   /// far brighter; the carpet's own slope across the image, in bright light, is not).
-  double border_robot_jump_factor = 2;
+  double border_robot_jump_factor = 1.25;
   double box_width_factor = 1.25;   ///< proposed box width in expected robot widths
   double box_height_factor = 1.08;  ///< proposed box height in expected robot heights
   double box_below_feet_fraction = 0.04;  ///< box bottom below the feet, in expected heights
