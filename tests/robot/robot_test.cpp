@@ -285,8 +285,8 @@ TEST(RobotProposer, RobotWhoseBodyTheLowerBorderCutsIsProposedWithItsFeetBelow) 
   CameraPose pose;
   pose.height_m = 0.5;
   pose.pitch_rad = 5 * std::numbers::pi / 180;
-  const CameraModel cam(CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * std::numbers::pi / 180),
-                        pose);
+  const CameraModel cam(
+      CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * std::numbers::pi / 180), pose);
   GrayImage img = carpet(41);
   const Eigen::Vector2d feet = drawRobot(img, cam, {0.45, 0.05});
   const auto [h, w] = robotSizePx(cam, feet);
@@ -314,8 +314,9 @@ TEST(RobotProposer, RobotWhoseBodyTheLowerBorderCutsIsProposedWithItsFeetBelow) 
   cv::Mat m = wrap(line);
   cv::rectangle(m, cv::Point(int(body_x0), 466), cv::Point(int(body_x1), 479), cv::Scalar(220),
                 cv::FILLED);
-  for (const RobotProposal& p : run(line).proposals) {
-    EXPECT_LE(p.feet_px.y(), 480) << describe(run(line));
+  const RobotProposals on_line = run(line);
+  for (const RobotProposal& p : on_line.proposals) {
+    EXPECT_LE(p.feet_px.y(), 480) << describe(on_line);
   }
   params.border_robot_min_width_factor = 0;
   const RobotProposals without = run(img);
