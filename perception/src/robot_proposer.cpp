@@ -425,15 +425,24 @@ std::vector<RobotProposal> borderRobots(const GrayView& image, const IgnoreMask&
     // robot's head leaves the camera's front (nearer robots there are wider).
     const double w_needed = wide / p.box_width_factor;
     double lo = image.height, hi = 8.0 * image.height;
-    while (hi - lo > 1 && !widthAt(cx, hi)) hi = (lo + hi) / 2;
-    const auto w_hi = widthAt(cx, hi);
+    std::optional<double> w_hi = widthAt(cx, hi);
+    while (!w_hi && hi - lo > 1) {
+      hi = (lo + hi) / 2;
+      w_hi = widthAt(cx, hi);
+    }
     if (!w_hi || *w_hi < w_needed) return;
+    // (hi stays a row with a width at least w_needed; a row without one counts as too narrow.)
     while (hi - lo > 0.5) {
       const double mid = (lo + hi) / 2;
       const auto w_mid = widthAt(cx, mid);
-      (w_mid && *w_mid < w_needed ? lo : hi) = mid;
+      if (w_mid && *w_mid >= w_needed) {
+        hi = mid;
+        w_hi = w_mid;
+      } else {
+        lo = mid;
+      }
     }
-    out.push_back(proposalAt(p, width_per_height, {cx, hi}, *widthAt(cx, hi) / width_per_height));
+    out.push_back(proposalAt(p, width_per_height, {cx, hi}, *w_hi / width_per_height));
   };
   // A robot's width on the lowest row, taken every 16 px (it varies slowly).
   std::optional<double> w;
