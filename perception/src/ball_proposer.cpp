@@ -42,6 +42,7 @@ BallProposerParams BallProposerParams::load(const std::string& path) {
   p.noise_free_gray = f.getInRange("noise_free_gray", 0, 255);
   p.response_noise_factor = f.getInRange("response_noise_factor", 0, 20);
   p.robot_body_factor = f.getInRange("robot_body_factor", 0, 1);
+  p.robot_body_width_fraction = f.getInRange("robot_body_width_fraction", 0, 1);
   p.off_axis_exponent = f.getInRange("off_axis_exponent", 0, 2);
   p.centre_search_fraction = f.getInRange("centre_search_fraction", 0, 2);
   p.radius_tolerance = f.getInRange("radius_tolerance", 0, 0.5);
@@ -784,14 +785,18 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   }
   // Robots' bodies above their feet regions (white, textured parts) cannot hold a visible ball
   // lying on the ground in front of them: their candidates count robot_body_factor of their response.
+  // The body is the middle of the box across: in the box's margins beside it a ball behind the
+  // robot shows in full.
   if (robots != nullptr && p.robot_body_factor < 1) {
     for (const RobotPercept& robot : *robots) {
       const auto rad = expectedRadius(camera, p, robot.feet_px, p.ball_radius_m);
       if (!rad) continue;
       const double top_of_feet = robot.feet_px.y() - p.feet_region_diameters * *rad;
+      const double centre_x = (robot.box.x0 + robot.box.x1) / 2;
+      const double half_body = p.robot_body_width_fraction * robot.box.width() / 2;
       for (std::vector<Candidate>* list : {&candidates, &line_candidates}) {
         for (Candidate& c : *list) {
-          if (c.x >= robot.box.x0 && c.x <= robot.box.x1 && c.y >= robot.box.y0 && c.y < top_of_feet) {
+          if (std::abs(c.x - centre_x) <= half_body && c.y >= robot.box.y0 && c.y < top_of_feet) {
             c.response *= static_cast<float>(p.robot_body_factor);
           }
         }

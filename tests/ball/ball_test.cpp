@@ -261,6 +261,56 @@ TEST(BallProposer, WorksWithoutAndWithRobotsAndIsCapped) {
   EXPECT_THROW(proposer.run(image.view(), cam, IgnoreMask::all(320, 240), regions, nullptr), Error);
 }
 
+// A detected robot's body damps the responses above its feet region (its white parts), but only
+// the middle of its box across (robot_body_width_fraction): a ball behind the robot seen beside
+// its body, in the box's margin, keeps its full response. Two balls 3 m away, a robot's box
+// (feet 1.2 m away) around both: the one at the box's middle counts robot_body_factor of its
+// response, the one near the box's edge all of it.
+TEST(BallProposer, ARobotsBodyDampsOnlyTheMiddleOfItsBox) {
+  const CameraModel cam = test::testCamera(22);
+  GrayImage image = test::renderScene(cam, carpetOnly(31));
+  const test::DrawnBall middle = test::drawBall(image, cam, {3.0, 0.0});
+  const test::DrawnBall beside = test::drawBall(image, cam, {3.0, -0.35});
+  const BallProposerParams p = BallProposerParams::loadDefault();
+  ASSERT_GT(p.robot_body_factor, 0);
+  ASSERT_LT(p.robot_body_factor, 1);
+  ASSERT_LT(p.robot_body_width_fraction, 1);
+  // The box: centred on the middle ball, its right edge just beyond the other ball, so that the
+  // other lies in the box's margin (outside the middle fraction, inside the box).
+  RobotPercept robot;
+  robot.feet_px = *cam.robotToPixel({1.2, 0.0, 0});
+  const double half = (beside.centre_px.x() - middle.centre_px.x()) / 0.95;
+  robot.box = {middle.centre_px.x() - half, middle.centre_px.y() - 200,
+               middle.centre_px.x() + half, robot.feet_px.y() + 10};
+  ASSERT_GT(std::abs(beside.centre_px.x() - middle.centre_px.x()), p.robot_body_width_fraction * half);
+  // Both balls lie above the feet region (feet_region_diameters ball radii above the feet point).
+  const double feet_radius = *cam.ballRadiusPx(robot.feet_px, p.ball_radius_m);
+  ASSERT_LT(std::max(middle.centre_px.y(), beside.centre_px.y()),
+            robot.feet_px.y() - p.feet_region_diameters * feet_radius * 1.5);
+  PipelineConfig config = PipelineConfig::loadDefault();
+  const IgnoreMask ignore = IgnoreMask::all(image.width(), image.height());
+  const ContrastRegions regions = HighContrastDetector(config.high_contrast).run(image.view(), ignore);
+  const BallProposer proposer(p);
+  const std::vector<RobotPercept> robots{robot};
+  const auto without = proposer.run(image.view(), cam, ignore, regions, nullptr);
+  const auto with = proposer.run(image.view(), cam, ignore, regions, &robots);
+  const int mid0 = matchIndex(without, middle), mid1 = matchIndex(with, middle);
+  const int side0 = matchIndex(without, beside), side1 = matchIndex(with, beside);
+  ASSERT_GE(mid0, 0) << describe(without);
+  ASSERT_GE(side0, 0) << describe(without);
+  ASSERT_GE(mid1, 0) << describe(with);
+  ASSERT_GE(side1, 0) << describe(with);
+  EXPECT_FLOAT_EQ(with[mid1].response, static_cast<float>(p.robot_body_factor) * without[mid0].response);
+  EXPECT_FLOAT_EQ(with[side1].response, without[side0].response);
+  // The whole box as the body (the rule before): the ball beside the body is damped too.
+  BallProposerParams whole = p;
+  whole.robot_body_width_fraction = 1.0;
+  const auto damped = BallProposer(whole).run(image.view(), cam, ignore, regions, &robots);
+  const int side2 = matchIndex(damped, beside);
+  ASSERT_GE(side2, 0) << describe(damped);
+  EXPECT_FLOAT_EQ(damped[side2].response, static_cast<float>(p.robot_body_factor) * without[side0].response);
+}
+
 // A dark hall seen through a soft lens: carpet at 30 grey levels, the ball's white at 72, the
 // frame blurred (two 3×3 box passes). The high-contrast stage's absolute threshold (22 grey levels)
 // leaves the ball's windows unmarked; the proposer's threshold that follows the frame's light scans

@@ -57,6 +57,7 @@ int probe(int argc, char** argv) {
   env("BP_OUTER", config.ball_proposer.outer_fraction);
   env("BP_TEXEXP", config.ball_proposer.texture_scale_exponent);
   env("BP_BODY", config.ball_proposer.robot_body_factor);
+  env("BP_BODYW", config.ball_proposer.robot_body_width_fraction);
   env("BP_OFFAXIS", config.ball_proposer.off_axis_exponent);
   env("BP_STEP", config.ball_proposer.step_fraction);
   env("BP_RIDGE", config.ball_proposer.centre_ridge_fraction);

@@ -61,8 +61,13 @@ struct BallProposerParams {
   /// scanned too (when robot percepts exist), and its responses are multiplied by feet_boost.
   double feet_region_diameters = 3.0;
   double feet_boost = 1.5;
-  /// Candidates inside a detected robot's box above its feet region: response × this.
+  /// Candidates on a detected robot's body above its feet region (its white, textured parts; no
+  /// ball on the ground in front of it shows there): response × this. The body: the middle
+  /// robot_body_width_fraction of the robot's box across (the box is 1.25 robot widths: 0.8 is
+  /// the robot's own width), from the box's top down to the feet region. Beside the body, in the
+  /// box's margins, a ball behind the robot shows in full (1: the whole box, as before).
   double robot_body_factor = 0.5;
+  double robot_body_width_fraction = 0.8;
   /// The response adds texture_weight × the mean edge strength (|horizontal| + |vertical| grey
   /// level difference to the next pixel) in the centre box: the ball's print is full of edges where
   /// feet, hands, lines, marks and an overexposed carpet are flat.
