@@ -66,7 +66,7 @@ struct BallProposerParams {
   /// robot_body_width_fraction of the robot's box across (the box is 1.25 robot widths: 0.8 is
   /// the robot's own width), from the box's top down to the feet region. Beside the body, in the
   /// box's margins, a ball behind the robot shows in full (1: the whole box, as before).
-  double robot_body_factor = 0.5;
+  double robot_body_factor = 0.7;
   double robot_body_width_fraction = 0.8;
   /// The response adds texture_weight × the mean edge strength (|horizontal| + |vertical| grey
   /// level difference to the next pixel) in the centre box: the ball's print is full of edges where
