@@ -44,8 +44,8 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<Options>();
   cmd->add_option("OBJECT", o->object,
                   "what to learn: ball (BoostBallNet, BallNet), smeared_ball (SmearedBallNet), "
-                  "robot (RobotNet), robot_feet (RobotFeetNet), ori_boost "
-                  "(OriBoostNet), ori (OriNet)")
+                  "robot (RobotNet), robot_behind (RobotBehindNet), robot_feet (RobotFeetNet), "
+                  "ori_boost (OriBoostNet), ori (OriNet)")
       ->required();
   cmd->add_option("--train", o->train, "training scenario files (new frames every round)")->required();
   cmd->add_option("--bootstrap", o->bootstrap, "scenario files without the object (hard negatives)");
@@ -79,20 +79,22 @@ void addLearnCommand(CLI::App& app, int& exit_code) {
       PipelineConfig config = PipelineConfig::loadDefault();
       if (o->object == "smeared_ball") config.ball_detector.smeared_min_coherence = o->min_smear;
       kind_ptr = std::make_unique<training::BallKind>(config, ScoringParams::loadDefault(), o->object == "smeared_ball");
-    } else if (o->object == "robot" || o->object == "robot_feet" || o->object == "ori_boost" ||
-               o->object == "ori") {
-      const auto which = o->object == "robot"        ? training::RobotNetChoice::kRobotNet
-                         : o->object == "robot_feet" ? training::RobotNetChoice::kFeetNet
-                         : o->object == "ori_boost"  ? training::RobotNetChoice::kOriBoostNet
-                                                     : training::RobotNetChoice::kOriNet;
-      if (which != training::RobotNetChoice::kRobotNet && !o->bootstrap.empty()) {
+    } else if (o->object == "robot" || o->object == "robot_behind" || o->object == "robot_feet" ||
+               o->object == "ori_boost" || o->object == "ori") {
+      const auto which = o->object == "robot"          ? training::RobotNetChoice::kRobotNet
+                         : o->object == "robot_behind" ? training::RobotNetChoice::kBehindNet
+                         : o->object == "robot_feet"   ? training::RobotNetChoice::kFeetNet
+                         : o->object == "ori_boost"    ? training::RobotNetChoice::kOriBoostNet
+                                                       : training::RobotNetChoice::kOriNet;
+      if (which != training::RobotNetChoice::kRobotNet &&
+          which != training::RobotNetChoice::kBehindNet && !o->bootstrap.empty()) {
         throw Error("learn: " + o->object + " has no hard negatives to bootstrap (leave out --bootstrap)");
       }
       kind_ptr = std::make_unique<training::RobotKind>(which, PipelineConfig::loadDefault(),
                                                        ScoringParams::loadDefault());
     } else {
       throw Error("learn: unknown object '" + o->object +
-                  "' (known: ball, smeared_ball, robot, robot_feet, ori_boost, ori)");
+                  "' (known: ball, smeared_ball, robot, robot_behind, robot_feet, ori_boost, ori)");
     }
     if (o->frames < 1 || o->stride < 1 || o->rounds < 0 || o->bootstrap_rounds < 0 || o->epochs < 1) {
       throw Error("learn: --frames, --stride and --epochs must be positive, --rounds not negative");

@@ -1,9 +1,11 @@
 #!/bin/sh
-# Regenerates robot_net, robot_feet_net, ori_boost_net and ori_net .weights (into perception/models unless told)
+# Regenerates robot_net, robot_feet_net, robot_behind_net, ori_boost_net and ori_net .weights (into
+# perception/models unless told)
 # with the shared active-learning loop (`colorfree learn`, paper 3.2) from the training scenarios
 # in scenes/train only (never the evaluation scenes); held-out accuracy from scenes/train/*holdout*.
 # Deterministic: same code, same weights, byte for byte. The three nets are independent; they can
-# run in parallel (the script runs them one after the other; robot_feet_net reads no other net).
+# run in parallel (the script runs them one after the other; robot_feet_net and robot_behind_net
+# read no other net).
 # Usage: scripts/train_robot_nets.sh [build dir] [dataset dir] [models dir]
 set -eu
 BUILD=${1:-build}
@@ -54,3 +56,16 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
   --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
   --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
   --dataset "$DATA/robot_feet"
+# RobotBehindNet: RobotNet's samples and the held-back candidates (boxes inside a nearer robot's:
+# robots behind it, and its hands, arms and knees, which RobotNet scored 0.97-0.997), from RobotNet's
+# training scenes and two of near robots before others (robot_overlap_train, robot_near_arms_train;
+# README "Robots and orientation", session 43).
+"$CF" learn robot_behind --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
+  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
+  $S/robot_far_train.yaml $S/robot_far2_train.yaml $S/robot_near_side_train.yaml \
+  $S/robot_near_topcut_train.yaml $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml \
+  $S/robot_overlap_train.yaml $S/robot_near_arms_train.yaml \
+  --bootstrap $S/robot_absent.yaml \
+  --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
+  --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
+  --dataset "$DATA/robot_behind"

@@ -80,7 +80,7 @@ Pipeline::Pipeline(PipelineConfig config)
       return cnn::Classifier::load(dir + "/" + stem + ".cfg", dir + "/" + stem + ".weights");
     };
     robot_detector_.emplace(config_.robot_detector, net("robot_net"), config_.field,
-                            net("robot_feet_net"));
+                            net("robot_feet_net"), net("robot_behind_net"));
     robot_orientation_.emplace(config_.robot_orientation, config_.field, net("ori_boost_net"),
                                net("ori_net"));
   }

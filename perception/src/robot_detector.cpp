@@ -77,10 +77,19 @@ cnn::PatchBox robotPatchBox(const RobotProposal& proposal) {
 }
 
 RobotDetector::RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net,
-                             FieldDimensions field, std::optional<cnn::Classifier> feet_net)
-    : params_(params), net_(std::move(robot_net)), field_(field), feet_net_(std::move(feet_net)) {
+                             FieldDimensions field, std::optional<cnn::Classifier> feet_net,
+                             std::optional<cnn::Classifier> behind_net)
+    : params_(params),
+      net_(std::move(robot_net)),
+      field_(field),
+      feet_net_(std::move(feet_net)),
+      behind_net_(std::move(behind_net)) {
   if (net_.input().width != 24 || net_.input().height != 24 || net_.classes() != 2) {
     throw Error("robot detector: RobotNet must take 24x24 patches and give 2 classes");
+  }
+  if (behind_net_ && (behind_net_->input().width != 24 || behind_net_->input().height != 24 ||
+                      behind_net_->classes() != 2)) {
+    throw Error("robot detector: RobotBehindNet must take 24x24 patches and give 2 classes");
   }
   if (feet_net_ && (feet_net_->input().width != 24 || feet_net_->input().height != 24 ||
                     feet_net_->classes() != 3)) {
@@ -91,9 +100,11 @@ RobotDetector::RobotDetector(RobotDetectorParams params, cnn::Classifier robot_n
 RobotDetector RobotDetector::loadDefault() {
   const cnn::ShippedNet& s = cnn::kShippedNets[0];
   const cnn::ShippedNet& f = cnn::kShippedNets[6];
+  const cnn::ShippedNet& b = cnn::kShippedNets[7];
   return RobotDetector(
       RobotDetectorParams::loadDefault(), cnn::Classifier::load(s.cfgPath(), s.weightsPath()),
-      FieldDimensions::loadDefault(), cnn::Classifier::load(f.cfgPath(), f.weightsPath()));
+      FieldDimensions::loadDefault(), cnn::Classifier::load(f.cfgPath(), f.weightsPath()),
+      cnn::Classifier::load(b.cfgPath(), b.weightsPath()));
 }
 
 namespace {
@@ -149,16 +160,17 @@ bool mirrorable(const PixelBox& box, const GrayView& image) {
 
 }  // namespace
 
-void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, const float* patches,
-                          std::size_t count, std::vector<float>& robot) const {
+void RobotDetector::score(const cnn::Classifier& net, const GrayView& image,
+                          const RobotProposal* boxes, const float* patches, std::size_t count,
+                          std::vector<float>& robot) const {
   if (count == 0) return;
-  const cnn::Shape& in = net_.input();
+  const cnn::Shape& in = net.input();
   const std::size_t n = static_cast<std::size_t>(in.size());
   // Near boxes looked at by area resampling too: the mean of both looks (a net that reads its
   // patches by area has had that look). Both looks in one batch.
   std::vector<std::size_t> near;
   const bool area_look =
-      params_.area_min_patch_widths > 0 && net_.net().resampling() != cnn::PatchResampling::kArea;
+      params_.area_min_patch_widths > 0 && net.net().resampling() != cnn::PatchResampling::kArea;
   for (std::size_t i = 0; i < count; ++i) {
     if (area_look && boxes[i].box.width() >= params_.area_min_patch_widths * in.width &&
         mirrorable(boxes[i].box, image)) {
@@ -167,16 +179,16 @@ void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, con
   }
   std::vector<float> probs((count + near.size()) * 2);
   if (near.empty()) {
-    net_.run(patches, static_cast<int>(count), probs.data());
+    net.run(patches, static_cast<int>(count), probs.data());
   } else {
     std::vector<float> looks((count + near.size()) * n);
     std::copy_n(patches, count * n, looks.data());
     for (std::size_t k = 0; k < near.size(); ++k) {
       cnn::extractPatch(image, robotPatchBox(boxes[near[k]]), in.width, in.height,
-                        net_.net().normalization(), looks.data() + (count + k) * n,
+                        net.net().normalization(), looks.data() + (count + k) * n,
                         cnn::PatchResampling::kArea);
     }
-    net_.run(looks.data(), static_cast<int>(count + near.size()), probs.data());
+    net.run(looks.data(), static_cast<int>(count + near.size()), probs.data());
     for (std::size_t k = 0; k < near.size(); ++k) {
       float& p = probs[2 * near[k] + 1];
       p = 0.5f * (p + probs[2 * (count + k) + 1]);
@@ -192,10 +204,10 @@ void RobotDetector::score(const GrayView& image, const RobotProposal* boxes, con
   if (!unsure.empty()) {
     std::vector<float> mirrored(unsure.size() * n), mirrored_probs(unsure.size() * 2);
     for (std::size_t k = 0; k < unsure.size(); ++k) {
-      cnn::mirrorPatch(patches + unsure[k] * n, net_.input().width, net_.input().height,
+      cnn::mirrorPatch(patches + unsure[k] * n, net.input().width, net.input().height,
                        mirrored.data() + k * n);
     }
-    net_.run(mirrored.data(), static_cast<int>(unsure.size()), mirrored_probs.data());
+    net.run(mirrored.data(), static_cast<int>(unsure.size()), mirrored_probs.data());
     for (std::size_t k = 0; k < unsure.size(); ++k) {
       float& p = probs[2 * unsure[k] + 1];
       p = 0.5f * (p + mirrored_probs[2 * k + 1]);
@@ -237,7 +249,7 @@ void RobotDetector::shiftWidePieces(const GrayView& image, std::vector<RobotProp
   for (std::size_t j = 0; j < moved.size(); ++j) {
     net_.extract(image, robotPatchBox(moved[j]), inputs.data() + j * n);
   }
-  score(image, moved.data(), inputs.data(), moved.size(), moved_robot);
+  score(net_, image, moved.data(), inputs.data(), moved.size(), moved_robot);
   for (std::size_t w = 0; w < which.size(); ++w) {
     const std::size_t i = which[w];
     for (std::size_t j = w * kLooks; j < (w + 1) * kLooks; ++j) {
@@ -320,7 +332,7 @@ void RobotDetector::searchFeet(const GrayView& image, const CameraModel& camera,
     net_.extract(image, robotPatchBox(looks[k]), inputs.data() + k * n);
   }
   std::vector<float> scores;
-  score(image, looks.data(), inputs.data(), looks.size(), scores);
+  score(net_, image, looks.data(), inputs.data(), looks.size(), scores);
   for (std::size_t k = 0; k < changed.size(); ++k) {
     if (scores[k] < params_.feet_search_accept_confidence) continue;
     const int i = changed[k];
@@ -492,7 +504,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     for (std::size_t i = from; i < seen.size(); ++i) {
       net_.extract(image, robotPatchBox(seen[i]), patches.data() + i * patch_size);
     }
-    score(image, seen.data() + from, patches.data() + from * patch_size, seen.size() - from, robot);
+    score(net_, image, seen.data() + from, patches.data() + from * patch_size, seen.size() - from,
+          robot);
   };
   // With candidates behind robots looked at, every held-back candidate is classified: all in one
   // batch with the proposals.
@@ -536,6 +549,41 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
                       (!seen[i].wide_group || robot[i] >= params_.min_wide_group_confidence);
     } else if (!behind_robot[i - proposals.size()]) {
       on_own_bar[i] = robot[i] >= params_.min_held_back_confidence;
+    }
+  }
+  // The boxes inside a nearer robot's: a held-back candidate behind a box RobotNet accepted, or a
+  // box accepted on its own bar whose feet point lies inside a nearer one's box (lower feet). They
+  // are a robot behind it or its hand, arm or knee; RobotBehindNet, trained with such boxes too,
+  // scores them instead of RobotNet (and the bars and rules below take its score).
+  if (behind_net_) {
+    std::vector<std::size_t> nested;
+    std::vector<RobotProposal> nested_boxes;
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+      bool inside = i >= proposals.size() && behind_robot[i - proposals.size()];
+      const Eigen::Vector2d& f = seen[i].feet_px;
+      for (std::size_t k = 0; k < seen.size() && !inside && on_own_bar[i]; ++k) {
+        const PixelBox& b = seen[k].box;
+        inside = k != i && on_own_bar[k] && seen[k].feet_px.y() > f.y() && f.x() > b.x0 &&
+                 f.x() < b.x1 && f.y() > b.y0 && f.y() < b.y1;
+      }
+      if (inside) {
+        nested.push_back(i);
+        nested_boxes.push_back(seen[i]);
+      }
+    }
+    const std::size_t n = static_cast<std::size_t>(behind_net_->input().size());
+    std::vector<float> inputs(nested.size() * n), scores;
+    for (std::size_t k = 0; k < nested.size(); ++k) {
+      behind_net_->extract(image, robotPatchBox(nested_boxes[k]), inputs.data() + k * n);
+    }
+    score(*behind_net_, image, nested_boxes.data(), inputs.data(), nested.size(), scores);
+    for (std::size_t k = 0; k < nested.size(); ++k) {
+      const std::size_t i = nested[k];
+      robot[i] = scores[k];
+      if (i < proposals.size()) {
+        on_own_bar[i] = robot[i] >= params_.min_confidence &&
+                        (!seen[i].wide_group || robot[i] >= params_.min_wide_group_confidence);
+      }
     }
   }
   std::vector<float> accepted(seen.size(), 0.0f);
@@ -664,7 +712,7 @@ std::vector<RobotPercept> RobotDetector::liftOffBalls(const GrayView& image,
     std::vector<float> patch(static_cast<std::size_t>(net_.input().size()));
     net_.extract(image, robotPatchBox(*lifted), patch.data());
     std::vector<float> robot;
-    score(image, &*lifted, patch.data(), 1, robot);
+    score(net_, image, &*lifted, patch.data(), 1, robot);
     // A second look at a box whose first place was doubtful, as a held-back candidate is.
     if (robot[0] < std::max(params_.min_confidence, params_.min_held_back_confidence)) continue;
     RobotPercept moved = r;

@@ -15,66 +15,17 @@
 #include "colorfree/perception/robot_detector.h"
 #include "colorfree/perception/robot_orientation.h"
 #include "colorfree/perception/robot_proposer.h"
+#include "drawn_robots.h"
 #include "synthetic_field.h"
 
 namespace colorfree {
 namespace {
-
-CameraModel testCamera() {
-  CameraPose pose;
-  pose.height_m = 0.5;
-  pose.pitch_rad = 14 * std::numbers::pi / 180;
-  return CameraModel(CameraIntrinsics::fromHorizontalFov(640, 480, 60.9 * std::numbers::pi / 180), pose);
-}
-
-// Dark, slightly noisy carpet.
-GrayImage carpet(std::uint64_t seed, int level = 60) {
-  GrayImage img(640, 480);
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> noise(0, 3);
-  for (int y = 0; y < 480; ++y)
-    for (int x = 0; x < 640; ++x)
-      img.at(x, y) = static_cast<std::uint8_t>(std::clamp(level + noise(rng), 0.0, 255.0));
-  return img;
-}
-
-cv::Mat wrap(GrayImage& img) { return cv::Mat(img.height(), img.width(), CV_8UC1, img.data()); }
 
 RobotProposals propose(const GrayImage& img, const CameraModel& cam) {
   const IgnoreMask all = IgnoreMask::all(img.width(), img.height());
   const ContrastRegions regions = HighContrastDetector().run(img.view(), all);
   return RobotProposer(RobotProposerParams::loadDefault(), FieldDimensions::loadDefault())
       .run(img.view(), cam, all, regions, true);
-}
-
-// A standing NAO's height and width in pixels with its feet at `feet_px` (FieldDimensions' sizes).
-struct RobotSizePx {
-  double h, w;
-};
-RobotSizePx robotSizePx(const CameraModel& cam, const Eigen::Vector2d& feet_px) {
-  const FieldDimensions field = FieldDimensions::loadDefault();
-  const double h = *cam.robotHeightPx(feet_px, field.robot_height_m);
-  return {h, h * field.robot_width_m / field.robot_height_m};
-}
-
-// Two bright legs and the body of a robot standing at `ground` (robot frame), drawn as the camera
-// sees them. The legs end where a NAO's do: its hips stand 0.25 m high (thigh 0.1 m, tibia 0.103 m,
-// ankle 0.045 m) of its 0.574 m, the pelvis' lower edge between the thighs at about 0.37 of the
-// height.
-Eigen::Vector2d drawRobot(GrayImage& img, const CameraModel& cam, const Eigen::Vector2d& ground) {
-  const Eigen::Vector2d feet = *cam.robotToPixel({ground.x(), ground.y(), 0});
-  const auto [h, w] = robotSizePx(cam, feet);
-  constexpr double kCrotchHeightFraction = 0.37;
-  cv::Mat m = wrap(img);
-  for (double side : {-0.3, 0.3}) {
-    const double cx = feet.x() + side * w;
-    cv::rectangle(m, cv::Point(int(cx - 0.12 * w), int(feet.y() - kCrotchHeightFraction * h)),
-                  cv::Point(int(cx + 0.12 * w), int(feet.y()) - 1), cv::Scalar(200), cv::FILLED);
-  }
-  cv::rectangle(m, cv::Point(int(feet.x() - 0.45 * w), int(feet.y() - h)),
-                cv::Point(int(feet.x() + 0.45 * w), int(feet.y() - kCrotchHeightFraction * h)),
-                cv::Scalar(210), cv::FILLED);
-  return feet;
 }
 
 TEST(RobotParams, DefaultsEqualShippedFiles) {
@@ -915,15 +866,20 @@ RobotProposal proposal(const PixelBox& box) {
   return p;
 }
 
-// A stand-in for RobotNet: its robot probability is sigmoid(40 (patch mean / 255) - 20), above
-// 0.5 on patches brighter than mid-gray.
-RobotDetector brightnessDetector(const RobotDetectorParams& params = {}) {
+// A stand-in robot net whose robot probability is sigmoid(weight (patch mean / 255) + bias).
+cnn::Classifier meanNet(float bias, float weight) {
   cnn::Net n = cnn::parseDarknetCfg(
       "# colorfree normalization=unit\n[net]\nwidth=24\nheight=24\nchannels=1\n\n"
       "[convolutional]\nfilters=2\nsize=1\nstride=1\nactivation=linear\n\n[avgpool]\n\n[softmax]\n",
-      "brightness net");
-  n.params() = {0.0f, -20.0f, 0.0f, 40.0f};  // biases (no robot, robot), then weights
-  return RobotDetector(params, cnn::Classifier(std::move(n)));
+      "mean net");
+  n.params() = {0.0f, bias, 0.0f, weight};  // biases (no robot, robot), then weights
+  return cnn::Classifier(std::move(n));
+}
+
+// A stand-in for RobotNet: its robot probability is sigmoid(40 (patch mean / 255) - 20), above
+// 0.5 on patches brighter than mid-gray.
+RobotDetector brightnessDetector(const RobotDetectorParams& params = {}) {
+  return RobotDetector(params, meanNet(-20, 40));
 }
 
 TEST(RobotDetector, HeldBackProposalIsClassifiedOnlyWhenNoNearerBoxHoldsARobot) {
@@ -1471,6 +1427,45 @@ TEST(RobotDetector, ABoxStoodOnABallIsLookedAtAboveItOrDropped) {
   ASSERT_EQ(kept.size(), 4u);  // the left box (0.6) looked at again; the right one (0.7) stays
   EXPECT_NEAR(kept[0].feet_px.y(), 310, 1e-9);
   EXPECT_EQ(kept[1].feet_px, on_right.feet_px);
+}
+
+TEST(RobotDetector, BoxesInsideANearerRobotsAreScoredByRobotBehindNet) {
+  // A near robot's box, a held-back candidate behind it and a proposal whose feet point lies in
+  // its box above its feet, all on a bright patch RobotNet (brightness) is sure of; RobotBehindNet
+  // scores the two inside the near robot's box: one taking dark patches for robots rejects them,
+  // one like RobotNet keeps them. The near box, inside none, keeps RobotNet's score.
+  GrayImage img = carpet(11);
+  cv::rectangle(wrap(img), cv::Point(300, 60), cv::Point(620, 300), cv::Scalar(200), cv::FILLED);
+  const CameraModel cam = testCamera();
+  const RobotProposal near = proposal(pixelBox(400, 100, 460, 200));
+  const RobotProposal beside = proposal(pixelBox(480, 120, 540, 220));  // held back behind near
+  const RobotProposal inside = proposal(pixelBox(420, 60, 450, 150));   // feet (435, 150) in near's box
+  const std::vector<HeldBackRobotProposal> held = {{beside, {0}}};
+  const RobotDetectorParams params;  // as shipped: behind a robot from 0.97
+  const auto detect = [&](std::optional<cnn::Classifier> behind_net,
+                          std::vector<float>& confidences) {
+    std::vector<RobotProposal> classified;
+    auto robots = RobotDetector(params, meanNet(-20, 40), {}, std::nullopt, std::move(behind_net))
+                      .run(img.view(), cam, {near, inside}, held, &classified, &confidences);
+    EXPECT_EQ(classified.size(), 3u);
+    std::vector<double> x0s;
+    for (const RobotPercept& r : robots) x0s.push_back(r.box.x0);
+    std::sort(x0s.begin(), x0s.end());
+    return x0s;
+  };
+  std::vector<float> without, dark, alike;
+  EXPECT_EQ(detect(std::nullopt, without), (std::vector<double>{400, 420, 480}));
+  EXPECT_EQ(detect(meanNet(20, -40), dark), (std::vector<double>{400}));
+  EXPECT_EQ(detect(meanNet(-20, 40), alike), (std::vector<double>{400, 420, 480}));
+  ASSERT_EQ(dark.size(), 3u);
+  EXPECT_FLOAT_EQ(dark[0], without[0]);  // the near box: RobotNet's
+  EXPECT_GT(without[1], 0.97f);
+  EXPECT_GT(without[2], 0.97f);
+  EXPECT_LT(dark[1], 0.03f);  // the two inside: RobotBehindNet's
+  EXPECT_LT(dark[2], 0.03f);
+  EXPECT_EQ(alike, without);
+  // A net of another shape is refused.
+  EXPECT_THROW(RobotDetector(params, meanNet(-20, 40), {}, std::nullopt, feetStandIn()), Error);
 }
 
 TEST(RobotDetector, AKneeBoxInsideARobotHeldBackBehindAnotherDoesNotShutItOut) {

@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include "colorfree/groundtruth/scoring_params.h"
 #include "colorfree/perception/pipeline.h"
+#include "drawn_robots.h"
 #include "synthetic_field.h"
 
 using namespace colorfree;
@@ -59,4 +62,36 @@ TEST(RobotKind, FeetNetSamplesAreLabelledByWhereTheRobotsFeetAre) {
   const RobotKind strict(RobotNetChoice::kFeetNet, PipelineConfig::loadDefault(),
                          ScoringParams::loadDefault(), rules);
   EXPECT_EQ(labels(strict.truthSamples(image, cam, truth)), (std::vector<int>{0, 1, 2}));
+}
+
+// RobotBehindNet's kind is RobotNet's but for the held-back candidates, which it takes too: a near
+// robot, one behind it and that one's hand beside the near robot's box (the proposer holds the
+// hand's box back behind the robot behind, RobotProposer.HandOfARobotBehindANearerOneIsHeldBackBehindIt).
+// Without robots in the truth every box is "none".
+TEST(RobotKind, BehindNetLearnsFromTheHeldBackCandidatesToo) {
+  const CameraModel cam = testCamera();
+  GrayImage img = carpet(12);
+  const Eigen::Vector2d b_feet = drawRobot(img, cam, {2.0, -0.05});
+  drawRobot(img, cam, {0.9, 0.15});
+  const int hand_x = static_cast<int>(b_feet.x()) + 44;
+  const int hand_y = static_cast<int>(b_feet.y() - 0.22 * robotSizePx(cam, b_feet).h);
+  cv::rectangle(wrap(img), cv::Point(hand_x - 9, hand_y - 70), cv::Point(hand_x + 9, hand_y - 1),
+                cv::Scalar(205), cv::FILLED);
+  const FrameTruth truth;
+  const RobotKind robot(RobotNetChoice::kRobotNet, PipelineConfig::loadDefault(),
+                        ScoringParams::loadDefault());
+  const RobotKind behind(RobotNetChoice::kBehindNet, PipelineConfig::loadDefault(),
+                         ScoringParams::loadDefault());
+  EXPECT_EQ(behind.name(), "robot_behind");
+  EXPECT_EQ(behind.netStems(), std::vector<std::string>{"robot_behind_net"});
+  EXPECT_EQ(behind.classNames(), robot.classNames());
+  const auto of_robot = robot.proposals(img, cam, truth);
+  const auto of_behind = behind.proposals(img, cam, truth);
+  std::set<std::string> keys;
+  for (const Candidate& c : of_behind) {
+    keys.insert(c.key);
+    EXPECT_EQ(c.label, 0) << c.key;
+  }
+  for (const Candidate& c : of_robot) EXPECT_TRUE(keys.count(c.key)) << c.key;
+  EXPECT_GT(of_behind.size(), of_robot.size());
 }

@@ -102,6 +102,8 @@ std::string RobotKind::name() const {
   switch (which_) {
     case RobotNetChoice::kRobotNet:
       return "robot";
+    case RobotNetChoice::kBehindNet:
+      return "robot_behind";
     case RobotNetChoice::kFeetNet:
       return "robot_feet";
     case RobotNetChoice::kOriBoostNet:
@@ -115,6 +117,7 @@ std::string RobotKind::name() const {
 std::vector<std::string> RobotKind::classNames() const {
   switch (which_) {
     case RobotNetChoice::kRobotNet:
+    case RobotNetChoice::kBehindNet:
       return {"none", "robot"};
     case RobotNetChoice::kFeetNet:
       return {"feet_right", "feet_lower", "feet_higher"};
@@ -135,6 +138,8 @@ std::vector<std::string> RobotKind::netStems() const {
   switch (which_) {
     case RobotNetChoice::kRobotNet:
       return {"robot_net"};
+    case RobotNetChoice::kBehindNet:
+      return {"robot_behind_net"};
     case RobotNetChoice::kFeetNet:
       return {"robot_feet_net"};
     case RobotNetChoice::kOriBoostNet:
@@ -200,7 +205,13 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
     }
     return out;
   }
-  for (const RobotProposal& p : props.proposals) {
+  // RobotBehindNet learns from the held-back candidates as well (robots behind nearer ones, and
+  // the nearer robots' hands, arms and knees).
+  std::vector<RobotProposal> seen = props.proposals;
+  if (which_ == RobotNetChoice::kBehindNet) {
+    for (const HeldBackRobotProposal& h : props.held_back) seen.push_back(h.proposal);
+  }
+  for (const RobotProposal& p : seen) {
     const auto feet = feetInField(camera, truth.observer, p.feet_px);
     int best = -1;
     double best_cost = 1e9;
@@ -216,7 +227,7 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
         best = static_cast<int>(i);
       }
     }
-    if (which_ == RobotNetChoice::kRobotNet) {
+    if (robotNet()) {
       if (best < 0 && any) continue;  // on a robot too hidden to demand: ambiguous
       Candidate c;
       c.box = patchBox(p.box);
@@ -274,7 +285,7 @@ std::vector<Candidate> RobotKind::proposals(const GrayImage& image, const Camera
       out.push_back(c);
     }
   }
-  if (which_ != RobotNetChoice::kRobotNet) return out;
+  if (!robotNet()) return out;
   // Robot-sized boxes at random ground points away from every robot: lines, posts, the ball, the
   // own body and the hall as RobotNet's negatives.
   std::mt19937_64 rng(frameSeed(image));
@@ -323,7 +334,7 @@ std::vector<Candidate> RobotKind::truthSamples(const GrayImage& /*image*/,
     }
     return out;
   }
-  if (which_ != RobotNetChoice::kRobotNet) return out;
+  if (!robotNet()) return out;
   for (const RobotInImage& r : truth.robots) {
     if (!r.in_view || !r.should_detect) continue;
     const auto b0 = proposerBox(camera, pp, dims, r.ground_px);

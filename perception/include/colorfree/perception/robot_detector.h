@@ -167,13 +167,17 @@ std::optional<RobotProposal> feetMovedTo(const RobotProposal& box, const CameraM
 
 /// Classifies robot proposals with RobotNet (24×24, paper 2.3) and turns the accepted ones into
 /// percepts with their ground point in the robot frame. With RobotFeetNet (24×24: the feet row
-/// right, lower or higher than the box's) the accepted boxes' feet are moved to the robot's.
+/// right, lower or higher than the box's) the accepted boxes' feet are moved to the robot's. With
+/// RobotBehindNet (RobotNet's shape, trained with the boxes inside nearer robots' boxes as well)
+/// the boxes inside a nearer robot's are scored by it instead of RobotNet (a robot behind it, or
+/// its hand, arm or knee, which RobotNet takes for robots).
 class RobotDetector {
  public:
   RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net, FieldDimensions field = {},
-                std::optional<cnn::Classifier> feet_net = std::nullopt);
-  /// The shipped parameters, RobotNet and RobotFeetNet (perception/models/robot_net.*,
-  /// robot_feet_net.*).
+                std::optional<cnn::Classifier> feet_net = std::nullopt,
+                std::optional<cnn::Classifier> behind_net = std::nullopt);
+  /// The shipped parameters, RobotNet, RobotFeetNet and RobotBehindNet
+  /// (perception/models/robot_net.*, robot_feet_net.*, robot_behind_net.*).
   static RobotDetector loadDefault();
   /// `confidences` (optional) gets RobotNet's output for every proposal, in order.
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
@@ -183,7 +187,7 @@ class RobotDetector {
   /// accepted (what a box without a robot seemed to hide is free), accepted from
   /// min_held_back_confidence; the others (behind a robot) as min_behind_robot_confidence says.
   /// `classified` (optional) gets every proposal RobotNet saw: `proposals`, then those held-back
-  /// ones; `confidences` one output each.
+  /// ones; `confidences` one output each (RobotBehindNet's for the boxes inside a nearer robot's).
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
                                 const std::vector<RobotProposal>& proposals,
                                 const std::vector<HeldBackRobotProposal>& held_back,
@@ -203,11 +207,11 @@ class RobotDetector {
   /// for every box as it was. Only with the net and feet_max_steps > 0.
   void moveFeet(const GrayView& image, const CameraModel& camera, std::vector<RobotProposal>& boxes,
                 const std::vector<int>& which, const std::vector<float>& robot_net_patches) const;
-  /// RobotNet's robot probabilities of the `count` inputs in `patches`, those of `boxes`, with the
-  /// area look at near boxes (see area_min_patch_widths) and then the mirrored look where it is
-  /// unsure (see mirror_min_confidence), appended to `robot`.
-  void score(const GrayView& image, const RobotProposal* boxes, const float* patches,
-             std::size_t count, std::vector<float>& robot) const;
+  /// `net`'s (RobotNet's or RobotBehindNet's) robot probabilities of the `count` inputs in
+  /// `patches`, those of `boxes`, with the area look at near boxes (see area_min_patch_widths) and
+  /// then the mirrored look where it is unsure (see mirror_min_confidence), appended to `robot`.
+  void score(const cnn::Classifier& net, const GrayView& image, const RobotProposal* boxes,
+             const float* patches, std::size_t count, std::vector<float>& robot) const;
   /// The pieces of wide groups among the first `count` of `boxes` moved sideways to where RobotNet
   /// scores them best (see wide_group_shift_width_fraction), with their scores in `robot` and their
   /// RobotNet inputs in `patches`, all in one batch.
@@ -225,6 +229,7 @@ class RobotDetector {
   cnn::Classifier net_;
   FieldDimensions field_;
   std::optional<cnn::Classifier> feet_net_;
+  std::optional<cnn::Classifier> behind_net_;
 };
 
 }  // namespace colorfree

@@ -17,6 +17,9 @@ enum class RobotNetChoice {
   kOriBoostNet,  ///< OriBoostNet: the lines generator's regions, usable line or not
   kOriNet,   ///< OriNet: usable regions, front, back or side (facing the observer's left or right)
   kFeetNet,  ///< RobotFeetNet: a box on a robot, its feet row right, too high or too low
+  /// RobotBehindNet: as RobotNet, and the held-back candidates too (boxes inside a nearer robot's:
+  /// robots behind it, and its hands, arms and knees), which the detector has it score
+  kBehindNet,
 };
 
 /// Labelling rules for the robot kinds (angles between a line and the true heading's axis or its
@@ -52,7 +55,7 @@ class RobotKind : public ObjectKind {
   /// OriNet's side classes say which way the robot faces in the image: a mirrored side region
   /// faces the other way, so only front and back (and the other nets' classes) may be flipped.
   std::vector<bool> flipAllowed() const override;
-  /// RobotNet: robot (1) and none (0). RobotFeetNet and the orientation nets have no object-free
+  /// RobotNet, RobotBehindNet: robot (1) and none (0). RobotFeetNet and the orientation nets have no object-free
   /// scenes to bootstrap on; their labels here are unused.
   int positiveLabel() const override { return 1; }
   int negativeLabel() const override { return which_ == RobotNetChoice::kOriNet ? 2 : 0; }
@@ -70,6 +73,10 @@ class RobotKind : public ObjectKind {
   std::optional<Candidate> feetCandidate(const CameraModel& camera, const FrameTruth& truth,
                                          const PixelBox& box, const Eigen::Vector2d& feet_px,
                                          const char* what) const;
+  /// RobotNet or RobotBehindNet (the same samples but the held-back candidates).
+  bool robotNet() const {
+    return which_ == RobotNetChoice::kRobotNet || which_ == RobotNetChoice::kBehindNet;
+  }
 
   RobotNetChoice which_;
   PipelineConfig config_;

@@ -40,6 +40,7 @@ inline constexpr ShippedNet kShippedNets[] = {
     {"OriNet", "ori_net", 24, {"front", "back", "side_left", "side_right"}, 657, 0.329, 0.984},
     {"SmearedBallNet", "smeared_ball_net", 26, {"none", "ball", nullptr, nullptr}, 0, 0, 0},
     {"RobotFeetNet", "robot_feet_net", 24, {"feet_right", "feet_lower", "feet_higher", nullptr}, 0, 0, 0},
+    {"RobotBehindNet", "robot_behind_net", 24, {"none", "robot", nullptr, nullptr}, 0, 0, 0},
 };
 // clang-format on
 
