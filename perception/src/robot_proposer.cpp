@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include "colorfree/perception/error.h"
 #include "colorfree/perception/noise.h"
@@ -89,6 +91,12 @@ RobotProposer::RobotProposer(RobotProposerParams params, FieldDimensions field)
 
 namespace {
 
+// std::lround for a non-negative value (a library call otherwise; here per lit pixel the scan meets).
+int roundPx(double v) {
+  const int i = static_cast<int>(v);
+  return v - i >= 0.5 ? i + 1 : i;
+}
+
 struct FeetPoint {
   int x = 0;
   int y = 0;               // first row below the run (the feet's lower edge)
@@ -124,34 +132,75 @@ struct CarpetWalk {
 #define CARPET_WALK_ATTRIBUTES __attribute__((noinline))
 #endif
 
+// a * b + c, rounded once where the target has FMA: the dependency chain through b is one
+// instruction.
+inline double mulAdd(double a, double b, double c) {
+#ifdef __FMA__
+  return std::fma(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+
 // Walks a scan line up from row y over the carpet and pixels darker than the reference, to the
 // first pixel brighter than the reference (returns its row; y_lo - 1 when there is none), updating
 // the carpet, the reference and the last dark stretch on the way. Not inlined: in its own frame
 // the loop's state stays in registers.
+//   Per row: carpet += weight (v - carpet); reference = max(carpet, reference (1 - decay)). The
+// walk takes two rows a step, the carpet and the reference two rows on from the step's start in
+// one multiply-add and one multiply (those dependency chains are the walk's cost), the row between
+// from them as well; the values differ from a row-by-row walk's by rounding only.
 CARPET_WALK_ATTRIBUTES int walkCarpet(const std::uint8_t* column, std::ptrdiff_t stride, int y, int y_lo,
                                       const ScanConstants& c, CarpetWalk& walk) {
   double carpet = walk.carpet, ref = walk.ref, thr = walk.thr;
   int dark_bottom = walk.dark_bottom, dark_top = walk.dark_top;
   const double min_jump = c.min_jump_gray, jump_ratio = c.jump_ratio;
-  const double weight = c.carpet_update_weight, keep = c.dark_keep;
+  const double weight = c.carpet_update_weight, carpet_keep = 1 - weight, keep = c.dark_keep;
+  const double carpet_keep2 = carpet_keep * carpet_keep, keep_weight = carpet_keep * weight,
+               keep2 = keep * keep;
   const int max_gap = c.max_gap_px;
-  for (const std::uint8_t* px = column + y * stride; y >= y_lo; --y, px -= stride) {
+  // Shadows are darker than the carpet, the robots' feet and legs brighter.
+  const auto dark = [&](double v, double reference, double threshold, int row) {
+    if (reference - v > threshold) {
+      if (dark_top < 0 || dark_top - row > max_gap + 1) dark_bottom = row;
+      dark_top = row;
+    }
+  };
+  const std::uint8_t* px = column + y * stride;
+  bool lit = false;
+  for (; y - 1 >= y_lo; y -= 2, px -= 2 * stride) {
+    const double v1 = px[0], v2 = px[-stride];
+    thr = std::max(min_jump, jump_ratio * ref);
+    if (v1 - ref > thr) {
+      lit = true;
+      break;
+    }
+    dark(v1, ref, thr, y);
+    const double carpet1 = mulAdd(carpet_keep, carpet, weight * v1);
+    const double ref1 = std::max(carpet1, ref * keep);
+    const double thr2 = std::max(min_jump, jump_ratio * ref1);
+    if (v2 - ref1 > thr2) {
+      carpet = carpet1;
+      ref = ref1;
+      thr = thr2;
+      --y;
+      lit = true;
+      break;
+    }
+    dark(v2, ref1, thr2, y - 1);
+    carpet = mulAdd(carpet_keep2, carpet, mulAdd(keep_weight, v1, weight * v2));
+    ref = std::max(carpet, std::max(carpet1 * keep, ref * keep2));
+    thr = thr2;
+  }
+  if (!lit && y >= y_lo) {  // the last row of an odd count
     const double v = *px;
     thr = std::max(min_jump, jump_ratio * ref);
-    // Shadows are darker than the carpet, the robots' feet and legs brighter.
-    if (v - ref > thr) break;
-    if (ref - v > thr) {
-      if (dark_top < 0 || dark_top - y > max_gap + 1) dark_bottom = y;
-      dark_top = y;
+    if (v - ref <= thr) {
+      dark(v, ref, thr, y);
+      carpet = mulAdd(carpet_keep, carpet, weight * v);
+      ref = std::max(carpet, ref * keep);
+      --y;
     }
-    // carpet += weight * (v - carpet), rounded once as the compiler contracts it on FMA targets
-    // (the proposals stay byte for byte those of the earlier code).
-#ifdef __FMA__
-    carpet = std::fma(weight, v - carpet, carpet);
-#else
-    carpet += weight * (v - carpet);
-#endif
-    ref = std::max(carpet, ref * keep);
   }
   walk.carpet = carpet;
   walk.ref = ref;
@@ -181,6 +230,8 @@ LitTest litTest(double ref, double thr, int x, int width, int side_px) {
   const bool left = side_px > 0 && x - side_px >= 0, right = side_px > 0 && x + side_px < width;
   return {ref, thr, !left && !right, left ? side_px : 0, right ? side_px : 0};
 }
+
+constexpr double kNoEnough = std::numeric_limits<double>::infinity();
 
 struct RobotRun {
   int top;     ///< the run's top row
@@ -220,10 +271,13 @@ bool litAlone(const std::uint8_t* column, std::ptrdiff_t stride, int y, int firs
 // `needed` rows above the feet row; a carpet gap longer than max_gap ends it, but for one knee
 // gap (see KneeGap). A pixel counts when it is lit (no_side: no test beside, as where the carpet
 // is known), or darker than the carpet (legs in shade) where the carpet is known.
+//   With enough_filled, the run stops at the hit that makes it that many rows, once its first
+// unlit row is known: the caller then asks nothing else of it (its top, a knee gap above).
 __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptrdiff_t stride,
                                             int y, int feet_y, int needed, int max_gap,
                                             const LitTest& lit_test, double carpet,
-                                            bool carpet_unknown, const KneeGap& knee) {
+                                            bool carpet_unknown, const KneeGap& knee,
+                                            double enough_filled = kNoEnough) {
   const double thr = lit_test.thr;
   int run_top = y, gap = 0, filled = 0, first_unlit = -1;
   int gap_limit = max_gap;
@@ -244,6 +298,7 @@ __attribute__((noinline)) RobotRun robotRun(const std::uint8_t* column, std::ptr
       ++filled;
       run_top = yy;
       gap = 0;
+      if (filled >= enough_filled && first_unlit >= 0) break;
     } else if (++gap > gap_limit) {
       if (!may_bridge || first_unlit < 0 || y - first_unlit < knee.min_lit_rows ||
           !litAlone(column, stride, y, first_unlit, lit_test, knee)) {
@@ -453,8 +508,8 @@ std::vector<RobotProposal> borderRobots(const GrayView& image, const IgnoreMask&
     }
     bool robot = false;
     if (w && ignore.bottom_y[x] == image.height) {
-      const int side = static_cast<int>(std::lround(p.beside_width_factor * *w));
-      const int rise = static_cast<int>(std::lround(p.border_robot_rise_width_fraction * *w));
+      const int side = roundPx(p.beside_width_factor * *w);
+      const int rise = roundPx(p.border_robot_rise_width_fraction * *w);
       // The carpet beside: the lower median of the pixels one to three robot widths to the left
       // and right (a near robot is wider than one: some of them lie on it).
       double beside[6];
@@ -591,24 +646,29 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
   const ScanConstants scan{min_jump, p.jump_ratio, p.carpet_update_weight,
                            1 - p.carpet_dark_decay, p.max_gap_px};
   const std::ptrdiff_t stride = image.stride;
+  // The marked vertical stretches of a window column, bottom up (window rows, top and bottom).
+  std::vector<std::pair<int, int>> stretches;
   for (int wc = 0; wc < regions.columns; ++wc) {
-    bool any = false;
-    for (int r = 0; r < regions.rows && !any; ++r) any = regions.marked(wc, r);
-    if (!any) continue;
+    stretches.clear();
+    for (int r = regions.rows - 1; r >= 0; --r) {
+      if (!regions.marked(wc, r)) continue;
+      int r_top = r;
+      while (r_top - 1 >= 0 && regions.marked(wc, r_top - 1)) --r_top;
+      stretches.emplace_back(r_top, r);
+      r = r_top;
+    }
+    if (stretches.empty()) continue;
     const int x_end = std::min(image.width, (wc + 1) * win);
     for (int x = wc * win + step / 2; x < x_end; x += step) {
       const int top = ignore.top_y[x];
       const int bottom = ignore.bottom_y[x];
-      // Marked vertical stretches of this window column, bottom up.
-      int r = std::min(regions.rows - 1, (bottom - 1) / win);
-      while (r >= 0) {
-        while (r >= 0 && !regions.marked(wc, r)) --r;
-        if (r < 0) break;
-        int r_top = r;
-        while (r_top - 1 >= 0 && regions.marked(wc, r_top - 1)) --r_top;
+      // Those up to the row of the lower edge (the image's or the own body's) at this column.
+      const int r_bottom = std::min(regions.rows - 1, (bottom - 1) / win);
+      for (const auto& [r_top, r_last] : stretches) {
+        if (r_top > r_bottom) continue;
+        const int r = std::min(r_last, r_bottom);
         const int y_hi = std::min(bottom - 1, (r + 1) * win - 1);
         const int y_lo = std::max(top, r_top * win);
-        r = r_top - 1;
         if (y_hi - y_lo < 2) continue;
         const std::uint8_t* const column = image.data + x;
         double carpet = column[y_hi * stride];
@@ -623,8 +683,7 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
           // cut by the border starts brighter than the carpet beside it, and its run starts at
           // the border (README robot19).
           if (const auto h = camera.robotHeightPx({x + 0.5, y_hi + 1.0}, robot_height_m_)) {
-            const int side =
-                static_cast<int>(std::lround(p.beside_width_factor * *h * width_per_height));
+            const int side = roundPx(p.beside_width_factor * *h * width_per_height);
             for (const int xs : {x - side, x + side}) {
               if (side > 0 && xs >= 0 && xs < image.width && ignore.looked(xs, y_hi)) {
                 carpet = std::min(carpet, static_cast<double>(image.row(y_hi)[xs]));
@@ -669,13 +728,12 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
           // brighter than the reference is a robot's only where it is brighter than the carpet
           // beside it as well: the carpet above a ball cut by the border is no robot.
           const int side_px = carpet_unknown
-                                  ? static_cast<int>(std::lround(p.beside_width_factor * *expected *
-                                                                 width_per_height))
+                                  ? roundPx(p.beside_width_factor * *expected * width_per_height)
                                   : 0;
           const LitTest lit = litTest(ref, thr, x, image.width, side_px);
           // How far beside a lit stretch a field line would still be lit (the line and knee tests).
           const int line_beside_px =
-              static_cast<int>(std::lround(p.line_beside_width_factor * *expected * width_per_height));
+              roundPx(p.line_beside_width_factor * *expected * width_per_height);
           KneeGap knee;
           if (p.knee_gap_height_fraction > 0) {
             knee.max_rows = static_cast<int>(p.knee_gap_height_fraction * *expected);
@@ -684,8 +742,13 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
             knee.left_px = x - line_beside_px >= 0 ? line_beside_px : 0;
             knee.right_px = x + line_beside_px < image.width ? line_beside_px : 0;
           }
+          // (A run long enough to be accepted is looked at no further, but where its expected
+          // height is too small: then its top is where the scan goes on.)
           const RobotRun run = robotRun(column, stride, y, feet_y, needed, max_gap, lit, carpet,
-                                        carpet_unknown, knee);
+                                        carpet_unknown, knee,
+                                        *expected < p.min_expected_height_px
+                                            ? kNoEnough
+                                            : p.min_fill_fraction * needed);
           const int run_top = run.top, filled = run.filled;
           // Where only the bridged run makes a feet point, with knee candidates apart, the point
           // goes to them and the scan goes on as it would without the gap.
@@ -710,8 +773,8 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
             }
             // Lit carpet (uneven light): the scan goes on above its lower edge.
             if (above_line < 0 && lit.no_side && p.lit_band_beside_width_factor > 0) {
-              const int band_px = static_cast<int>(
-                  std::lround(p.lit_band_beside_width_factor * *expected * width_per_height));
+              const int band_px =
+                  roundPx(p.lit_band_beside_width_factor * *expected * width_per_height);
               const LitTest lit_beside = litTest(ref, thr, x, image.width, band_px);
               const int band_needed =
                   std::max(1, static_cast<int>(p.lit_band_height_fraction * needed));
@@ -776,8 +839,8 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
                                          static_cast<int>(
                                              std::ceil(p.short_object_height_fraction * *expected)),
                                          max_gap, thr,
-                                         static_cast<int>(std::lround(
-                                             p.beside_width_factor * *expected * width_per_height)))
+                                         roundPx(p.beside_width_factor * *expected *
+                                                 width_per_height))
                         : -1;
                 if (top < 0 || feet_y - top < p.short_object_min_height_fraction * *expected) break;
                 y = top - 1;
@@ -865,7 +928,7 @@ RobotProposals RobotProposer::run(const GrayView& input, const CameraModel& came
         continue;
       }
       const int n = w > p.split_width_factor * w_expected
-                        ? std::max(1, static_cast<int>(std::lround(w / w_expected)))
+                        ? std::max(1, roundPx(w / w_expected))
                         : 1;
       for (int i = 0; i < n; ++i) {
         RobotProposal rp =

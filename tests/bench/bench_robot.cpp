@@ -56,8 +56,11 @@ Fixture& fixture() {
 
 void bmRobotProposals(benchmark::State& state) {
   Fixture& f = fixture();
+  // With the frame's noise estimate, as the pipeline calls the stage (it estimates the noise once
+  // per frame for the proposers).
   for (auto _ : state) {
-    auto out = f.proposer.run(f.frame->image, f.frame->camera, *f.frame->ignore_mask, *f.frame->contrast_regions);
+    auto out = f.proposer.run(f.frame->image, f.frame->camera, *f.frame->ignore_mask,
+                              *f.frame->contrast_regions, false, f.frame->pixel_noise_gray);
     benchmark::DoNotOptimize(out);
   }
   state.counters["proposals"] = static_cast<double>(f.proposals.proposals.size());
