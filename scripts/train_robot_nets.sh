@@ -58,14 +58,15 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
   --dataset "$DATA/robot_feet"
 # RobotBehindNet: RobotNet's samples and the held-back candidates (boxes inside a nearer robot's:
 # robots behind it, and its hands, arms and knees, which RobotNet scored 0.97-0.997), from RobotNet's
-# training scenes and two of near robots before others (robot_overlap_train, robot_near_arms_train;
-# README "Robots and orientation", session 43).
+# training scenes and three of near robots before others (robot_overlap_train, robot_near_arms_train,
+# robot_pair_behind_train), 8 frames a case, every second one (README "Robots and orientation",
+# session 43).
 "$CF" learn robot_behind --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
   $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
   $S/robot_far_train.yaml $S/robot_far2_train.yaml $S/robot_near_side_train.yaml \
   $S/robot_near_topcut_train.yaml $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml \
-  $S/robot_overlap_train.yaml $S/robot_near_arms_train.yaml \
+  $S/robot_overlap_train.yaml $S/robot_near_arms_train.yaml $S/robot_pair_behind_train.yaml \
   --bootstrap $S/robot_absent.yaml \
   --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
-  --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
+  --frames 8 --stride 2 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
   --dataset "$DATA/robot_behind"

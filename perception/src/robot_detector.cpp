@@ -29,6 +29,7 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.area_min_patch_widths = f.getInRange("area_min_patch_widths", 0, 100);
   p.min_behind_robot_confidence = f.getInRange("min_behind_robot_confidence", 0, 1);
   p.behind_lower_part_fraction = f.getInRange("behind_lower_part_fraction", 0, 1);
+  p.behind_net_veto_confidence = f.getInRange("behind_net_veto_confidence", 0, 1);
   p.shin_gap_height_fraction = f.getInRange("shin_gap_height_fraction", 0, 1);
   p.shin_reach_width_fraction = f.getInRange("shin_reach_width_fraction", 0, 5);
   p.shin_min_jump_gray = f.getInRange("shin_min_jump_gray", 1, 255);
@@ -553,9 +554,11 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   }
   // The boxes inside a nearer robot's: a held-back candidate behind a box RobotNet accepted, or a
   // box accepted on its own bar whose feet point lies inside a nearer one's box (lower feet). They
-  // are a robot behind it or its hand, arm or knee; RobotBehindNet, trained with such boxes too,
-  // scores them instead of RobotNet (and the bars and rules below take its score).
-  if (behind_net_) {
+  // are a robot behind it or its hand, arm or knee, which RobotNet scores as high as robots;
+  // RobotBehindNet, trained with such boxes too, looks at them as well: one it scores under
+  // behind_net_veto_confidence is no robot (its score replaces RobotNet's for the bars and rules
+  // below).
+  if (behind_net_ && params_.behind_net_veto_confidence > 0) {
     std::vector<std::size_t> nested;
     std::vector<RobotProposal> nested_boxes;
     for (std::size_t i = 0; i < seen.size(); ++i) {
@@ -579,6 +582,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     score(*behind_net_, image, nested_boxes.data(), inputs.data(), nested.size(), scores);
     for (std::size_t k = 0; k < nested.size(); ++k) {
       const std::size_t i = nested[k];
+      if (scores[k] >= params_.behind_net_veto_confidence) continue;
       robot[i] = scores[k];
       if (i < proposals.size()) {
         on_own_bar[i] = robot[i] >= params_.min_confidence &&

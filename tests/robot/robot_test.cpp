@@ -1429,11 +1429,12 @@ TEST(RobotDetector, ABoxStoodOnABallIsLookedAtAboveItOrDropped) {
   EXPECT_EQ(kept[1].feet_px, on_right.feet_px);
 }
 
-TEST(RobotDetector, BoxesInsideANearerRobotsAreScoredByRobotBehindNet) {
+TEST(RobotDetector, RobotBehindNetVetoesBoxesInsideANearerRobots) {
   // A near robot's box, a held-back candidate behind it and a proposal whose feet point lies in
   // its box above its feet, all on a bright patch RobotNet (brightness) is sure of; RobotBehindNet
-  // scores the two inside the near robot's box: one taking dark patches for robots rejects them,
-  // one like RobotNet keeps them. The near box, inside none, keeps RobotNet's score.
+  // looks at the two inside the near robot's box: one taking dark patches for robots rejects them
+  // (under behind_net_veto_confidence: no robots), one like RobotNet keeps them with RobotNet's
+  // scores. The near box, inside none, is RobotNet's alone; veto 0: RobotBehindNet is not asked.
   GrayImage img = carpet(11);
   cv::rectangle(wrap(img), cv::Point(300, 60), cv::Point(620, 300), cv::Scalar(200), cv::FILLED);
   const CameraModel cam = testCamera();
@@ -1441,7 +1442,7 @@ TEST(RobotDetector, BoxesInsideANearerRobotsAreScoredByRobotBehindNet) {
   const RobotProposal beside = proposal(pixelBox(480, 120, 540, 220));  // held back behind near
   const RobotProposal inside = proposal(pixelBox(420, 60, 450, 150));   // feet (435, 150) in near's box
   const std::vector<HeldBackRobotProposal> held = {{beside, {0}}};
-  const RobotDetectorParams params;  // as shipped: behind a robot from 0.97
+  RobotDetectorParams params;  // as shipped: behind a robot from 0.97, the veto under 0.5
   const auto detect = [&](std::optional<cnn::Classifier> behind_net,
                           std::vector<float>& confidences) {
     std::vector<RobotProposal> classified;
@@ -1464,6 +1465,11 @@ TEST(RobotDetector, BoxesInsideANearerRobotsAreScoredByRobotBehindNet) {
   EXPECT_LT(dark[1], 0.03f);  // the two inside: RobotBehindNet's
   EXPECT_LT(dark[2], 0.03f);
   EXPECT_EQ(alike, without);
+  params.behind_net_veto_confidence = 0;
+  std::vector<float> off;
+  EXPECT_EQ(detect(meanNet(20, -40), off), (std::vector<double>{400, 420, 480}));
+  EXPECT_EQ(off, without);
+  params.behind_net_veto_confidence = 0.5;
   // A net of another shape is refused.
   EXPECT_THROW(RobotDetector(params, meanNet(-20, 40), {}, std::nullopt, feetStandIn()), Error);
 }

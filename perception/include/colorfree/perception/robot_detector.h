@@ -63,6 +63,11 @@ struct RobotDetectorParams {
   /// candidate's box with its feet in that part of it is its knee or hand, which does not shut
   /// it out as a nearer robot's body would. 0: none of these tests.
   double behind_lower_part_fraction = 0.4;
+  /// With RobotBehindNet: a box inside a nearer robot's (a held-back candidate behind an accepted
+  /// robot, or an accepted box whose feet point lies inside a nearer accepted box) that it scores
+  /// under this is no robot, whatever RobotNet says (its score replaces RobotNet's); from this
+  /// on RobotNet's score stands. 0: never.
+  double behind_net_veto_confidence = 0.5;
   /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
   /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
   /// stand at the knees or thighs, its box too high. The lit stretch below the feet at most this
@@ -169,8 +174,8 @@ std::optional<RobotProposal> feetMovedTo(const RobotProposal& box, const CameraM
 /// percepts with their ground point in the robot frame. With RobotFeetNet (24×24: the feet row
 /// right, lower or higher than the box's) the accepted boxes' feet are moved to the robot's. With
 /// RobotBehindNet (RobotNet's shape, trained with the boxes inside nearer robots' boxes as well)
-/// the boxes inside a nearer robot's are scored by it instead of RobotNet (a robot behind it, or
-/// its hand, arm or knee, which RobotNet takes for robots).
+/// a box inside a nearer robot's that it rejects is no robot (a robot behind it, or its hand, arm
+/// or knee, which RobotNet takes for robots; see behind_net_veto_confidence).
 class RobotDetector {
  public:
   RobotDetector(RobotDetectorParams params, cnn::Classifier robot_net, FieldDimensions field = {},
@@ -187,7 +192,8 @@ class RobotDetector {
   /// accepted (what a box without a robot seemed to hide is free), accepted from
   /// min_held_back_confidence; the others (behind a robot) as min_behind_robot_confidence says.
   /// `classified` (optional) gets every proposal RobotNet saw: `proposals`, then those held-back
-  /// ones; `confidences` one output each (RobotBehindNet's for the boxes inside a nearer robot's).
+  /// ones; `confidences` one output each (RobotBehindNet's for the boxes inside a nearer robot's
+  /// that it rejects).
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
                                 const std::vector<RobotProposal>& proposals,
                                 const std::vector<HeldBackRobotProposal>& held_back,
