@@ -556,13 +556,17 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   // box accepted on its own bar whose feet point lies inside a nearer one's box (lower feet). They
   // are a robot behind it or its hand, arm or knee, which RobotNet scores as high as robots;
   // RobotBehindNet, trained with such boxes too, looks at them as well: one it scores under
-  // behind_net_veto_confidence is no robot (its score replaces RobotNet's for the bars and rules
-  // below).
+  // behind_net_veto_confidence is no robot (score 0 for the bars and rules below; `confidences`
+  // keeps RobotNet's).
+  std::optional<std::vector<float>> robot_net_scores;
   if (behind_net_ && params_.behind_net_veto_confidence > 0) {
+    if (confidences) robot_net_scores = robot;
     std::vector<std::size_t> nested;
     std::vector<RobotProposal> nested_boxes;
     for (std::size_t i = 0; i < seen.size(); ++i) {
-      bool inside = i >= proposals.size() && behind_robot[i - proposals.size()];
+      // (A held-back candidate under the bar behind a robot stays out whatever this net says.)
+      bool inside = i >= proposals.size() && behind_robot[i - proposals.size()] &&
+                    robot[i] >= params_.min_behind_robot_confidence;
       const Eigen::Vector2d& f = seen[i].feet_px;
       for (std::size_t k = 0; k < seen.size() && !inside && on_own_bar[i]; ++k) {
         const PixelBox& b = seen[k].box;
@@ -581,13 +585,9 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     }
     score(*behind_net_, image, nested_boxes.data(), inputs.data(), nested.size(), scores);
     for (std::size_t k = 0; k < nested.size(); ++k) {
-      const std::size_t i = nested[k];
       if (scores[k] >= params_.behind_net_veto_confidence) continue;
-      robot[i] = scores[k];
-      if (i < proposals.size()) {
-        on_own_bar[i] = robot[i] >= params_.min_confidence &&
-                        (!seen[i].wide_group || robot[i] >= params_.min_wide_group_confidence);
-      }
+      robot[nested[k]] = 0;
+      on_own_bar[nested[k]] = false;
     }
   }
   std::vector<float> accepted(seen.size(), 0.0f);
@@ -682,7 +682,9 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
     if (auto lowered = feetOnShins(image, camera, r, params_, field_)) r = *lowered;
     out.push_back(r);
   }
-  if (confidences) *confidences = std::move(robot);
+  if (confidences) {
+    *confidences = robot_net_scores ? std::move(*robot_net_scores) : std::move(robot);
+  }
   if (classified) *classified = std::move(seen);
   return out;
 }

@@ -65,8 +65,8 @@ struct RobotDetectorParams {
   double behind_lower_part_fraction = 0.4;
   /// With RobotBehindNet: a box inside a nearer robot's (a held-back candidate behind an accepted
   /// robot, or an accepted box whose feet point lies inside a nearer accepted box) that it scores
-  /// under this is no robot, whatever RobotNet says (its score replaces RobotNet's); from this
-  /// on RobotNet's score stands. 0: never.
+  /// under this is no robot, whatever RobotNet says; from this on RobotNet's score stands.
+  /// 0: never.
   double behind_net_veto_confidence = 0.5;
   /// Shins below an accepted robot's feet (feetOnShins): in backlit light a robot's knees, in their
   /// own shade, can have the carpet's gray over more than a run's gap, and the proposal's feet
@@ -192,8 +192,7 @@ class RobotDetector {
   /// accepted (what a box without a robot seemed to hide is free), accepted from
   /// min_held_back_confidence; the others (behind a robot) as min_behind_robot_confidence says.
   /// `classified` (optional) gets every proposal RobotNet saw: `proposals`, then those held-back
-  /// ones; `confidences` one output each (RobotBehindNet's for the boxes inside a nearer robot's
-  /// that it rejects).
+  /// ones; `confidences` RobotNet's output for each (RobotBehindNet's veto aside).
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
                                 const std::vector<RobotProposal>& proposals,
                                 const std::vector<HeldBackRobotProposal>& held_back,
