@@ -1440,7 +1440,7 @@ TEST(RobotDetector, RobotBehindNetVetoesBoxesInsideANearerRobots) {
   const CameraModel cam = testCamera();
   const RobotProposal near = proposal(pixelBox(400, 100, 460, 200));
   const RobotProposal beside = proposal(pixelBox(480, 120, 540, 220));  // held back behind near
-  const RobotProposal inside = proposal(pixelBox(420, 60, 450, 150));   // feet (435, 150) in near's box
+  const RobotProposal inside = proposal(pixelBox(420, 60, 450, 150));   // feet in near's box
   const std::vector<HeldBackRobotProposal> held = {{beside, {0}}};
   RobotDetectorParams params;  // as shipped: behind a robot from 0.97, the veto under 0.5
   const auto detect = [&](std::optional<cnn::Classifier> behind_net,

@@ -66,8 +66,8 @@ TEST(RobotKind, FeetNetSamplesAreLabelledByWhereTheRobotsFeetAre) {
 
 // RobotBehindNet's kind is RobotNet's but for the held-back candidates, which it takes too: a near
 // robot, one behind it and that one's hand beside the near robot's box (the proposer holds the
-// hand's box back behind the robot behind, RobotProposer.HandOfARobotBehindANearerOneIsHeldBackBehindIt).
-// Without robots in the truth every box is "none".
+// hand's box back behind the robot behind: RobotProposer.HandOfARobotBehindANearerOneIsHeldBack-
+// BehindIt). Without robots in the truth every box is "none".
 TEST(RobotKind, BehindNetLearnsFromTheHeldBackCandidatesToo) {
   const CameraModel cam = testCamera();
   GrayImage img = carpet(12);

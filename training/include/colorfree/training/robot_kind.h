@@ -18,7 +18,7 @@ enum class RobotNetChoice {
   kOriNet,   ///< OriNet: usable regions, front, back or side (facing the observer's left or right)
   kFeetNet,  ///< RobotFeetNet: a box on a robot, its feet row right, too high or too low
   /// RobotBehindNet: as RobotNet, and the held-back candidates too (boxes inside a nearer robot's:
-  /// robots behind it, and its hands, arms and knees), which the detector has it score
+  /// robots behind it, and its hands, arms and knees), on which the detector asks for its veto
   kBehindNet,
 };
 
@@ -55,8 +55,8 @@ class RobotKind : public ObjectKind {
   /// OriNet's side classes say which way the robot faces in the image: a mirrored side region
   /// faces the other way, so only front and back (and the other nets' classes) may be flipped.
   std::vector<bool> flipAllowed() const override;
-  /// RobotNet, RobotBehindNet: robot (1) and none (0). RobotFeetNet and the orientation nets have no object-free
-  /// scenes to bootstrap on; their labels here are unused.
+  /// RobotNet, RobotBehindNet: robot (1) and none (0). RobotFeetNet and the orientation nets have
+  /// no object-free scenes to bootstrap on; their labels here are unused.
   int positiveLabel() const override { return 1; }
   int negativeLabel() const override { return which_ == RobotNetChoice::kOriNet ? 2 : 0; }
   std::vector<Candidate> proposals(const GrayImage& image, const CameraModel& camera,
