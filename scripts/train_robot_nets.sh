@@ -15,6 +15,12 @@ CF="$BUILD/bin/colorfree"
 S=scenes/train
 ORI_TRAIN="$S/robot_orientation_train.yaml $S/robot_orientation_walk_train.yaml $S/robot_orientation_near_train.yaml
   $S/robot_orientation_turn2_train.yaml $S/robot_orientation_walk2_train.yaml"
+# RobotNet's training scenes (RobotFeetNet's and RobotBehindNet's too) and its held-out ones.
+ROBOT_TRAIN="$S/robot_detect_train.yaml $S/robot_detect_train2.yaml $S/robot_orientation_train.yaml
+  $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml $S/robot_far_train.yaml
+  $S/robot_far2_train.yaml $S/robot_near_side_train.yaml $S/robot_near_topcut_train.yaml
+  $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml"
+ROBOT_HOLDOUT="$S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml"
 COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --models $MODELS --quiet"
 # shellcheck disable=SC2086
 "$CF" learn ori_boost --train $ORI_TRAIN \
@@ -38,22 +44,18 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
 # with the head pitched down) beside the far ones (2.6-5.6 m, the ball at the lower border), held
 # out on near, far and mixed scenes; 60 epochs with patience 12 per round (with 40 / 8 and without
 # robot_near_centre_train the net still rejected near side views, README "Robots and orientation").
-"$CF" learn robot --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
-  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
-  $S/robot_far_train.yaml $S/robot_far2_train.yaml $S/robot_near_side_train.yaml \
-  $S/robot_near_topcut_train.yaml $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml \
+# shellcheck disable=SC2086
+"$CF" learn robot --train $ROBOT_TRAIN \
   --bootstrap $S/robot_absent.yaml \
-  --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
+  --validation $ROBOT_HOLDOUT \
   --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
   --dataset "$DATA/robot"
 # RobotFeetNet: whether an accepted box's feet row is right (within 0.05 of the robot's height),
 # too high or too low (0.1-0.45): the real proposer's boxes on robots and boxes about every robot's
 # feet moved by 0, +-0.15 and +-0.3 of its height, from RobotNet's training scenes (README robot21).
-"$CF" learn robot_feet --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
-  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
-  $S/robot_far_train.yaml $S/robot_far2_train.yaml $S/robot_near_side_train.yaml \
-  $S/robot_near_topcut_train.yaml $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml \
-  --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
+# shellcheck disable=SC2086
+"$CF" learn robot_feet --train $ROBOT_TRAIN \
+  --validation $ROBOT_HOLDOUT \
   --frames 5 --stride 4 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
   --dataset "$DATA/robot_feet"
 # RobotBehindNet: RobotNet's samples and the held-back candidates (boxes inside a nearer robot's:
@@ -61,12 +63,10 @@ COMMON="--frames 5 --stride 4 --rounds 2 --epochs 40 --patience 8 --seed 1 --mod
 # training scenes and three of near robots before others (robot_overlap_train, robot_near_arms_train,
 # robot_pair_behind_train), 8 frames a case, every second one (README "Robots and orientation",
 # session 43).
-"$CF" learn robot_behind --train $S/robot_detect_train.yaml $S/robot_detect_train2.yaml \
-  $S/robot_orientation_train.yaml $S/robot_orientation_near_train.yaml $S/robot_near_views_train.yaml \
-  $S/robot_far_train.yaml $S/robot_far2_train.yaml $S/robot_near_side_train.yaml \
-  $S/robot_near_topcut_train.yaml $S/robot_near_goal_train.yaml $S/robot_near_centre_train.yaml \
+# shellcheck disable=SC2086
+"$CF" learn robot_behind --train $ROBOT_TRAIN \
   $S/robot_overlap_train.yaml $S/robot_near_arms_train.yaml $S/robot_pair_behind_train.yaml \
   --bootstrap $S/robot_absent.yaml \
-  --validation $S/robot_holdout.yaml $S/robot_far_holdout.yaml $S/robot_near_holdout.yaml \
+  --validation $ROBOT_HOLDOUT \
   --frames 8 --stride 2 --rounds 2 --epochs 60 --patience 12 --seed 1 --models "$MODELS" --quiet \
   --dataset "$DATA/robot_behind"
