@@ -159,6 +159,14 @@ bool mirrorable(const PixelBox& box, const GrayView& image) {
   return box.x0 >= 0 && box.x1 <= image.width && box.y1 <= image.height;
 }
 
+// Whether `feet` lies inside the box of `nearer`, whose own feet stand lower in the image (a
+// nearer robot's): the feet point of its knee, hand or arm, or of a robot behind it.
+bool feetInsideNearer(const Eigen::Vector2d& feet, const RobotProposal& nearer) {
+  const PixelBox& b = nearer.box;
+  return nearer.feet_px.y() > feet.y() && feet.x() > b.x0 && feet.x() < b.x1 && feet.y() > b.y0 &&
+         feet.y() < b.y1;
+}
+
 }  // namespace
 
 void RobotDetector::score(const cnn::Classifier& net, const GrayView& image,
@@ -567,21 +575,25 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       // (A held-back candidate under the bar behind a robot stays out whatever this net says.)
       bool inside = i >= proposals.size() && behind_robot[i - proposals.size()] &&
                     robot[i] >= params_.min_behind_robot_confidence;
-      const Eigen::Vector2d& f = seen[i].feet_px;
       for (std::size_t k = 0; k < seen.size() && !inside && on_own_bar[i]; ++k) {
-        const PixelBox& b = seen[k].box;
-        inside = k != i && on_own_bar[k] && seen[k].feet_px.y() > f.y() && f.x() > b.x0 &&
-                 f.x() < b.x1 && f.y() > b.y0 && f.y() < b.y1;
+        inside = k != i && on_own_bar[k] && feetInsideNearer(seen[i].feet_px, seen[k]);
       }
       if (inside) {
         nested.push_back(i);
         nested_boxes.push_back(seen[i]);
       }
     }
-    const std::size_t n = static_cast<std::size_t>(behind_net_->input().size());
-    std::vector<float> inputs(nested.size() * n), scores;
+    // RobotNet's patches where the net reads its patches alike (the shipped one: RobotNet's cfg).
+    const bool same_input = behind_net_->net().normalization() == net_.net().normalization() &&
+                            behind_net_->net().resampling() == net_.net().resampling();
+    std::vector<float> inputs(nested.size() * patch_size), scores;
     for (std::size_t k = 0; k < nested.size(); ++k) {
-      behind_net_->extract(image, robotPatchBox(nested_boxes[k]), inputs.data() + k * n);
+      if (same_input) {
+        std::copy_n(patches.data() + nested[k] * patch_size, patch_size,
+                    inputs.data() + k * patch_size);
+      } else {
+        behind_net_->extract(image, robotPatchBox(nested_boxes[k]), inputs.data() + k * patch_size);
+      }
     }
     score(*behind_net_, image, nested_boxes.data(), inputs.data(), nested.size(), scores);
     for (std::size_t k = 0; k < nested.size(); ++k) {
@@ -624,9 +636,7 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
       const Eigen::Vector2d& f = seen[i].feet_px;
       bool hidden = false;
       for (std::size_t k = 0; k < seen.size() && !hidden; ++k) {
-        const PixelBox& b = seen[k].box;
-        hidden = accepted[k] > 0 && seen[k].feet_px.y() > f.y() && f.x() > b.x0 && f.x() < b.x1 &&
-                 f.y() > b.y0 && f.y() < b.y1;
+        hidden = accepted[k] > 0 && feetInsideNearer(f, seen[k]);
       }
       if (!hidden) which.push_back(static_cast<int>(i));
     }
