@@ -304,6 +304,39 @@ TEST(FieldLines, UprightWhitePartIsNotALine) {
   EXPECT_TRUE(not_on_ground);
 }
 
+// A robot standing on a line across the view: its two feet (white blocks with dark soles over the
+// line) join the line as a few spots, some scanned the other way with widths nothing like a painted
+// line's there. The line is still on the ground: the width trend leaves out the share of spots at
+// the ends of the expected widths (width_trend_trim_fraction); with none left out the feet's spots
+// made the line "not on the ground" (the penalty area's front line under a robot in
+// scenes/orientation_static_lines.yaml).
+TEST(FieldLines, ALineWithARobotStandingOnItIsOnTheGround) {
+  const CameraModel cam = test::testCamera(22);
+  test::SyntheticScene scene;
+  scene.segments.push_back({{1.2, -1.5}, {1.2, 1.5}});
+  const GrayImage clean = test::renderScene(cam, scene);
+  GrayImage image = clean;
+  const Eigen::Vector2d on_line = *cam.robotToPixel({1.2, 0, 0});
+  for (const int cx : {static_cast<int>(on_line.x()) - 26, static_cast<int>(on_line.x()) + 26}) {
+    const int bottom = static_cast<int>(on_line.y()) + 6;
+    for (int y = bottom - 40; y <= bottom; ++y) {
+      for (int x = cx - 20; x <= cx + 20; ++x) image.at(x, y) = y > bottom - 6 ? 30 : 220;
+    }
+  }
+  const auto penaltyLine = [](const FieldLineResult& r) {
+    return std::any_of(r.features.lines.begin(), r.features.lines.end(), [](const LinePercept& l) {
+      return std::abs(l.start_in_robot.x() - 1.2) < 0.05 && std::abs(l.end_in_robot.x() - 1.2) < 0.05 &&
+             (l.end_in_robot - l.start_in_robot).norm() > 1.0;
+    });
+  };
+  FieldLineParams untrimmed = FieldLineParams::loadDefault();
+  ASSERT_GT(untrimmed.width_trend_trim_fraction, 0);
+  EXPECT_TRUE(penaltyLine(FieldLineDetector().run(clean.view(), cam, IgnoreMask::all(640, 480))));
+  EXPECT_TRUE(penaltyLine(FieldLineDetector().run(image.view(), cam, IgnoreMask::all(640, 480))));
+  untrimmed.width_trend_trim_fraction = 0;
+  EXPECT_FALSE(penaltyLine(FieldLineDetector(untrimmed).run(image.view(), cam, IgnoreMask::all(640, 480))));
+}
+
 TEST(FieldLines, BallIsNotAPenaltyMark) {
   // The penalty mark scene, with a ball-like blob 0.6 m left of the mark.
   const FieldPose pose = kScenes[1].pose;
