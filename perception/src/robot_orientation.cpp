@@ -53,8 +53,6 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.field_line_margin_px = f.getInRange("field_line_margin_px", 0, 50);
   p.field_line_min_length_m = f.getInRange("field_line_min_length_m", 0, 20);
   p.field_line_min_angle_deg = f.getInRange("field_line_min_angle_deg", 0, 90);
-  p.field_line_along_max_deg = f.getInRange("field_line_along_max_deg", 0, 90);
-  p.field_line_along_max_distance_m = f.getInRange("field_line_along_max_distance_m", 0, 1);
   p.region_margin_fraction = f.getInRange("region_margin_fraction", 0, 2);
   p.region_above_fraction = f.getInRange("region_above_fraction", 0, 2);
   p.region_below_fraction = f.getInRange("region_below_fraction", 0, 2);
@@ -426,8 +424,7 @@ class FieldMarkingsAtFeet {
   FieldMarkingsAtFeet(const RobotOrientationParams& p, const FieldFeatures& field, const CameraModel& camera,
                       const std::optional<Eigen::Vector2d>& feet_ground, int x_left, int x_right, int y_top,
                       int y_bottom, double half_width_m, double circle_radius_m)
-      : margin_px_(p.field_line_margin_px), half_width_m_(half_width_m), circle_radius_m_(circle_radius_m),
-        viewpoint_(camera.position().head<2>()) {
+      : margin_px_(p.field_line_margin_px), half_width_m_(half_width_m), circle_radius_m_(circle_radius_m) {
     if (margin_px_ <= 0 || !feet_ground) return;
     const Eigen::Vector2d sight = (*feet_ground - camera.position().head<2>()).normalized();
     const double max_cos = std::cos(p.field_line_min_angle_deg * std::numbers::pi / 180);
@@ -468,48 +465,18 @@ class FieldMarkingsAtFeet {
     const auto g_above = camera.pixelToGround(px - Eigen::Vector2d(0, 1));
     if (!g || !g_above) return false;
     const double band = half_width_m_ + margin_px_ * (*g - *g_above).norm();
-    return within(*g, -band, band, band, nullptr, 0);
-  }
-
-  // Whether the ground line from a to b runs along one of them: its direction within the angle
-  // whose cosine is min_cos of the marking's there, its middle on the marking or in front of it
-  // (on the viewpoint's side) by at most max_distance from the marking's middle. (A toe's rim
-  // sticks out in front of the marking the feet stand on; a feet edge beyond a marking is the feet's.)
-  bool along(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double min_cos, double max_distance) const {
-    const Eigen::Vector2d d = b - a;
-    if (d.norm() <= 0) return false;
-    const Eigen::Vector2d u = d.normalized();
-    return within((a + b) / 2, -half_width_m_, max_distance, max_distance, &u, min_cos);
+    for (const GroundLine& l : lines_) {
+      if (nearSegment(l.a, l.u, l.length, *g, band, band)) return true;
+    }
+    return circle_centre_ && std::abs((*g - *circle_centre_).norm() - circle_radius_m_) <= band;
   }
 
  private:
-  // Whether ground point g lies across a marking between lo and hi from its middle, positive
-  // towards the viewpoint (a straight line's extended by `reach` beyond its ends); with a direction
-  // u, only markings whose direction there is within the cosine min_cos of it count.
-  bool within(const Eigen::Vector2d& g, double lo, double hi, double reach, const Eigen::Vector2d* u,
-              double min_cos) const {
-    for (const GroundLine& l : lines_) {
-      if (u && std::abs(u->dot(l.u)) < min_cos) continue;
-      const Eigen::Vector2d normal(-l.u.y(), l.u.x());
-      const double side = normal.dot(viewpoint_ - l.a) >= 0 ? 1 : -1;
-      const double offset = side * normal.dot(g - l.a), along_line = (g - l.a).dot(l.u);
-      if (along_line >= -reach && along_line <= l.length + reach && offset >= lo && offset <= hi) return true;
-    }
-    if (!circle_centre_) return false;
-    const Eigen::Vector2d radial = g - *circle_centre_;
-    const double r = radial.norm();
-    if (u && (r <= 0 || std::abs(u->dot(radial)) / r > std::sqrt(1 - min_cos * min_cos))) return false;
-    const double side = (viewpoint_ - *circle_centre_).norm() >= circle_radius_m_ ? 1 : -1;
-    const double offset = side * (r - circle_radius_m_);
-    return offset >= lo && offset <= hi;
-  }
-
   struct GroundLine {
     Eigen::Vector2d a, u;  ///< a point and the unit direction on the ground
     double length;
   };
   double margin_px_, half_width_m_, circle_radius_m_;
-  Eigen::Vector2d viewpoint_;  ///< the camera's place on the ground
   std::vector<GroundLine> lines_;
   std::optional<Eigen::Vector2d> circle_centre_;
 };
@@ -802,8 +769,7 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   bounds.max_voter_gap = p.line_max_voter_gap_m;
   const SilhouetteLines lines = findSilhouetteLines(out.silhouette_in_robot, bounds);
   std::optional<Eigen::Vector2d> first_direction;
-  for (int k = 0; k < 2; ++k) {
-    std::optional<LineHypothesis> line = k == 0 ? lines.first : lines.second;
+  for (auto line : {lines.first, lines.second}) {
     if (!line || line->votes < p.min_line_votes) continue;
     // Twice: the hull edge's direction is rough, the first fit's much less so.
     line = refineLine(*line, out.silhouette_in_robot, p.vote_distance_m, p.vote_margin_m,
@@ -819,14 +785,6 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
     // region, not the feet's.
     if (p.line_max_feet_distance_m > 0 && feet_ground &&
         ((line->a + line->b) / 2 - *feet_ground).norm() > p.line_max_feet_distance_m) {
-      continue;
-    }
-    // Along a field marking the robot stands on, its direction is the marking's; the second line
-    // was chosen orthogonal to such a first one, so neither is classified.
-    if (p.field_line_along_max_deg > 0 &&
-        markings.along(line->a, line->b, std::cos(p.field_line_along_max_deg * std::numbers::pi / 180),
-                       p.field_line_along_max_distance_m)) {
-      if (k == 0) break;
       continue;
     }
     if (!first_direction) first_direction = line->direction();

@@ -2017,66 +2017,6 @@ TEST(LinesGenerator, ADetectedFieldLineInFrontOfTheFeetIsNoSilhouette) {
   }
 }
 
-// A robot standing on a field line: the feet's edges over the line are white on white, and the
-// silhouette left is the part of the feet in front of the line, its lower edge running along the
-// line whatever the heading (the centre circle's arc under a robot's toes in
-// scenes/train/robot_orientation_static_tune2.yaml). Drawn: a block (both feet) over a line across
-// the line of sight, its near edge 0.05 m in front of the line's middle. Such a line is not
-// classified (field_line_along_max_deg); with the rule off it is, and a block turned 30 degrees on
-// the same line still gives its region.
-TEST(LinesGenerator, AFeetLineAlongTheFieldLineTheRobotStandsOnIsNotClassified) {
-  const CameraModel cam = testCamera();
-  const double line_x = 1.2;
-  LinePercept field_line;
-  field_line.start_in_robot = {line_x, -1.5};
-  field_line.end_in_robot = {line_x, 1.5};
-  field_line.start_px = *cam.robotToPixel({line_x, -1.5, 0});
-  field_line.end_px = *cam.robotToPixel({line_x, 1.5, 0});
-  FieldFeatures features;
-  features.lines = {field_line};
-  const auto px = [&](double x, double y) {
-    const auto q = cam.robotToPixel({x, y, 0});
-    return cv::Point(int(std::lround(q->x())), int(std::lround(q->y())));
-  };
-  RobotOrientationParams off = RobotOrientationParams::loadDefault();
-  ASSERT_GE(off.field_line_along_max_deg, 3);
-  ASSERT_GE(off.field_line_along_max_distance_m, 0.06);
-  off.field_line_along_max_deg = 0;
-  const RobotOrientationEstimator estimator = untrainedEstimator(), without = untrainedEstimator(off);
-  const auto alongTheLine = [](const RobotLines& out) {
-    return std::count_if(out.regions.begin(), out.regions.end(), [](const LineRegion& r) {
-      const Eigen::Vector2d d = (r.line_in_robot.b - r.line_in_robot.a).normalized();
-      return std::abs(d.y()) > std::cos(5 * std::numbers::pi / 180);
-    });
-  };
-  for (const double yaw_deg : {0.0, 30.0}) {
-    SCOPED_TRACE(yaw_deg);
-    GrayImage img = carpet(17);
-    cv::Mat m = wrap(img);
-    cv::fillConvexPoly(m, std::vector<cv::Point>{px(line_x - 0.025, -1.5), px(line_x - 0.025, 1.5),
-                                                 px(line_x + 0.025, 1.5), px(line_x + 0.025, -1.5)},
-                       cv::Scalar(200));
-    const Eigen::Vector2d centre(line_x - 0.05 + 0.08, 0.0);
-    const std::vector<cv::Point> hull = footBlockHull(cam, centre, yaw_deg);
-    cv::fillConvexPoly(m, hull, cv::Scalar(200));
-    const RobotPercept robot = perceptOfBlock(cam, hull, centre);
-    const RobotLines with_rule = estimator.findLines(img.view(), cam, robot, features);
-    const RobotLines without_rule = without.findLines(img.view(), cam, robot, features);
-    EXPECT_GT(with_rule.silhouette_px.size(), 20u);
-    if (yaw_deg == 0) {
-      ASSERT_FALSE(without_rule.regions.empty());
-      EXPECT_EQ(alongTheLine(without_rule), 1);
-      const Eigen::Vector2d mid = (without_rule.regions[0].line_in_robot.a + without_rule.regions[0].line_in_robot.b) / 2;
-      EXPECT_NEAR(mid.x(), line_x - 0.05, 0.02);  // the block's near edge, in front of the line
-      EXPECT_EQ(alongTheLine(with_rule), 0);
-    } else {
-      ASSERT_FALSE(with_rule.regions.empty());
-      EXPECT_EQ(alongTheLine(with_rule), 0);
-      EXPECT_EQ(with_rule.regions.size(), without_rule.regions.size());
-    }
-  }
-}
-
 // OriNet looks at each region as it is and mirrored, the mirrored look's side classes swapped: a
 // stand-in OriNet that says "side facing left" more surely when a region's left half is the
 // brighter (logit 2 as it is, 1 mirrored, against 0 for the front) gives a side region of unknown

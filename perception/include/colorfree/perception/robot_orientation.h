@@ -98,14 +98,6 @@ struct RobotOrientationParams {
   double field_line_margin_px = 2;
   double field_line_min_length_m = 0.5;
   double field_line_min_angle_deg = 30;
-  /// A line (after its refits) within field_line_along_max_deg of such a field line's or the
-  /// circle's direction there, its middle on the marking or in front of it (the camera's side) by at
-  /// most field_line_along_max_distance_m from the marking's middle, is not classified (when it is
-  /// the first line, neither is: the second was chosen orthogonal to it): a robot standing on a
-  /// marking shows its feet's edges along it as white on white, and what is left (a toe's rim)
-  /// runs along the marking whatever the robot's heading (0: off)
-  double field_line_along_max_deg = 5;
-  double field_line_along_max_distance_m = 0.1;
   double region_margin_fraction = 0.25;      ///< region: line width grown by this at both ends
   double region_above_fraction = 0.35;       ///< region height above the line, in robot heights
   double region_below_fraction = 0.06;       ///< below the line, in robot heights
