@@ -598,7 +598,8 @@ void printBenchTables(const json& results) {
                     object == "orientation" ? "orient" : object.c_str(),
                     m.at("should_detect").is_number() ? std::to_string(m.at("should_detect").get<long>()).c_str()
                                                       : "-",
-                    fmt(m.at("proposal_recall")).c_str(), fmt(m.at("proposals_per_frame"), 1).c_str(),
+                    object == "orientation" ? "-" : fmt(m.at("proposal_recall")).c_str(),
+                    object == "orientation" ? "-" : fmt(m.at("proposals_per_frame"), 1).c_str(),
                     fmt(m.at("detection_rate")).c_str(), fmt(m.at("false_positives_per_frame")).c_str(),
                     unmet.c_str());
         first = false;
@@ -767,7 +768,8 @@ std::string renderBenchHtml(const json& results, const std::vector<std::string>&
           << esc(sc.at("experiment").get<std::string>()) << "</a></td><td>" << sc.at("frames").get<long>()
           << "</td><td>" << (object == "orientation" ? "orientation (filtered: shares of robot-frames)" : object)
           << "</td><td>" << cell(m.at("should_detect"), 0) << "</td><td>"
-          << cell(m.at("proposal_recall")) << "</td><td>" << cell(m.at("proposals_per_frame"), 1) << "</td><td>"
+          << (object == "orientation" ? "-" : cell(m.at("proposal_recall"))) << "</td><td>"
+          << (object == "orientation" ? "-" : cell(m.at("proposals_per_frame"), 1)) << "</td><td>"
           << cell(m.at("detection_rate")) << "</td><td>" << cell(m.at("false_positives_per_frame"))
           << "</td><td>" << esc(unmet.empty() ? "none" : unmet) << "</td></tr>";
       }

@@ -45,7 +45,7 @@ FieldLineParams FieldLineParams::load(const std::string& path) {
   p.extend_max_gap_m = f.getInRange("extend_max_gap_m", 0, 2);
   p.width_trend_min_range = f.getInRange("width_trend_min_range", 1, 100);
   p.min_width_trend = f.getInRange("min_width_trend", -10, 10);
-  p.width_trend_trim_fraction = f.getInRange("width_trend_trim_fraction", 0, 0.45);
+  p.width_trend_minority_fraction = f.getInRange("width_trend_minority_fraction", 0, 0.5);
   p.circle_radius_tolerance_m = f.getInRange("circle_radius_tolerance_m", 0, 1);
   p.circle_inlier_distance_m = f.getInRange("circle_inlier_distance_m", 0, 1);
   p.circle_inlier_distance_per_metre = f.getInRange("circle_inlier_distance_per_metre", 0, 1);
@@ -810,24 +810,27 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
       // direction on the ground); those of an upright part (a robot's leg) do not.
       std::vector<double> expected;
       expected.reserve(pc.ids.size());
-      std::vector<double> positive;
-      for (int id : pc.ids) {
-        const double e = widthAlongScan(camera, out.spots[id].position_in_robot, pc.fit.direction, lw,
-                                        out.spots[id].vertical_scan);
+      // Spots scanned the other way than most of the piece's, when they are few (a robot's feet
+      // standing on the line join it as a few such spots, their widths nothing like a painted
+      // line's there), are left out of the trend.
+      int vertical = 0;
+      for (int id : pc.ids) vertical += out.spots[id].vertical_scan ? 1 : 0;
+      const int others = std::min<int>(vertical, static_cast<int>(pc.ids.size()) - vertical);
+      const bool majority_vertical = 2 * vertical >= static_cast<int>(pc.ids.size());
+      const bool drop_others = others <= p.width_trend_minority_fraction * static_cast<double>(pc.ids.size());
+      std::vector<char> counted(pc.ids.size(), 0);
+      double e_min = 1e300, e_max = 0;
+      for (std::size_t i = 0; i < pc.ids.size(); ++i) {
+        const auto& spot = out.spots[pc.ids[i]];
+        const double e = widthAlongScan(camera, spot.position_in_robot, pc.fit.direction, lw, spot.vertical_scan);
         expected.push_back(e);
-        if (e > 0) positive.push_back(e);
+        counted[i] = e > 0 && !(drop_others && spot.vertical_scan != majority_vertical);
+        if (counted[i]) e_min = std::min(e_min, e), e_max = std::max(e_max, e);
       }
-      // The expected widths' range and the fit without the trimmed share at either end (a few
-      // spots on a robot's feet standing on the line, scanned the other way, are no trend).
-      std::sort(positive.begin(), positive.end());
-      const std::size_t trim = static_cast<std::size_t>(p.width_trend_trim_fraction * positive.size());
-      const double e_min = positive.size() > 2 * trim ? positive[trim] : 0;
-      const double e_max = positive.size() > 2 * trim ? positive[positive.size() - 1 - trim] : 0;
-      const auto counted = [&](double e) { return e > 0 && e >= e_min && e <= e_max; };
       if (e_max > 0 && e_max / e_min >= p.width_trend_min_range) {
         double mx = 0, my = 0, n = 0;
         for (std::size_t i = 0; i < pc.ids.size(); ++i) {
-          if (!counted(expected[i])) continue;
+          if (!counted[i]) continue;
           mx += std::log(expected[i]);
           my += std::log(std::max(1.0, out.spots[pc.ids[i]].width_px));
           ++n;
@@ -836,7 +839,7 @@ FieldLineResult FieldLineDetector::run(const GrayView& image, const CameraModel&
         my /= n;
         double sxy = 0, sxx = 0;
         for (std::size_t i = 0; i < pc.ids.size(); ++i) {
-          if (!counted(expected[i])) continue;
+          if (!counted[i]) continue;
           const double dx = std::log(expected[i]) - mx;
           sxy += dx * (std::log(std::max(1.0, out.spots[pc.ids[i]].width_px)) - my);
           sxx += dx * dx;

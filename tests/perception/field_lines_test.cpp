@@ -306,8 +306,8 @@ TEST(FieldLines, UprightWhitePartIsNotALine) {
 
 // A robot standing on a line across the view: its two feet (white blocks with dark soles over the
 // line) join the line as a few spots, some scanned the other way with widths nothing like a painted
-// line's there. The line is still on the ground: the width trend leaves out the share of spots at
-// the ends of the expected widths (width_trend_trim_fraction); with none left out the feet's spots
+// line's there. The line is still on the ground: the width trend leaves out a few spots scanned the
+// other way than most of the line's (width_trend_minority_fraction); with none left out the feet's spots
 // made the line "not on the ground" (the penalty area's front line under a robot in
 // scenes/orientation_static_lines.yaml).
 TEST(FieldLines, ALineWithARobotStandingOnItIsOnTheGround) {
@@ -330,10 +330,10 @@ TEST(FieldLines, ALineWithARobotStandingOnItIsOnTheGround) {
     });
   };
   FieldLineParams untrimmed = FieldLineParams::loadDefault();
-  ASSERT_GT(untrimmed.width_trend_trim_fraction, 0);
+  ASSERT_GT(untrimmed.width_trend_minority_fraction, 0);
   EXPECT_TRUE(penaltyLine(FieldLineDetector().run(clean.view(), cam, IgnoreMask::all(640, 480))));
   EXPECT_TRUE(penaltyLine(FieldLineDetector().run(image.view(), cam, IgnoreMask::all(640, 480))));
-  untrimmed.width_trend_trim_fraction = 0;
+  untrimmed.width_trend_minority_fraction = 0;
   EXPECT_FALSE(penaltyLine(FieldLineDetector(untrimmed).run(image.view(), cam, IgnoreMask::all(640, 480))));
 }
 

@@ -54,9 +54,10 @@ struct FieldLineParams {
   /// (a painted line: about 1; an upright white robot part: about 0).
   double width_trend_min_range = 1.6;
   double min_width_trend = 0.45;
-  /// The range and the slope leave out this share of the spots at either end of the expected
-  /// widths (a robot's feet on the line scanned the other way join it as a few spots)
-  double width_trend_trim_fraction = 0.1;
+  /// Spots scanned the other way than most of the piece's are left out of the range and the slope
+  /// when they are at most this share of its spots (a robot's feet standing on the line join it as
+  /// a few such spots; 0: none left out)
+  double width_trend_minority_fraction = 0.05;
   /// Centre circle: radius tolerance of a fit and the share of its spots that must lie on it.
   double circle_radius_tolerance_m = 0.12;
   double circle_inlier_distance_m = 0.05;
