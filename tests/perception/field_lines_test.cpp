@@ -329,12 +329,12 @@ TEST(FieldLines, ALineWithARobotStandingOnItIsOnTheGround) {
              (l.end_in_robot - l.start_in_robot).norm() > 1.0;
     });
   };
-  FieldLineParams untrimmed = FieldLineParams::loadDefault();
-  ASSERT_GT(untrimmed.width_trend_minority_fraction, 0);
+  FieldLineParams none_left_out = FieldLineParams::loadDefault();
+  ASSERT_GT(none_left_out.width_trend_minority_fraction, 0);
   EXPECT_TRUE(penaltyLine(FieldLineDetector().run(clean.view(), cam, IgnoreMask::all(640, 480))));
   EXPECT_TRUE(penaltyLine(FieldLineDetector().run(image.view(), cam, IgnoreMask::all(640, 480))));
-  untrimmed.width_trend_minority_fraction = 0;
-  EXPECT_FALSE(penaltyLine(FieldLineDetector(untrimmed).run(image.view(), cam, IgnoreMask::all(640, 480))));
+  none_left_out.width_trend_minority_fraction = 0;
+  EXPECT_FALSE(penaltyLine(FieldLineDetector(none_left_out).run(image.view(), cam, IgnoreMask::all(640, 480))));
 }
 
 TEST(FieldLines, BallIsNotAPenaltyMark) {
