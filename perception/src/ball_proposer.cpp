@@ -4,7 +4,9 @@
 #include <cmath>
 #include <memory>
 
-#if defined(__SSE2__)
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
@@ -96,27 +98,59 @@ class Integrals {
     for (int y = 0; y < h_; ++y) {
       const std::uint8_t* src = image.row(y0 + y) + x0;
       const std::uint8_t* below = image.row(std::min(y0 + y + 1, image.height - 1)) + x0;
-      std::uint32_t* px = pix.data();
-      for (int x = 0; x < last; ++x) {
-        px[2 * x] = src[x];
-        px[2 * x + 1] =
-            static_cast<std::uint32_t>(std::abs(src[x + 1] - src[x]) + std::abs(below[x] - src[x]));
-      }
-      for (int x = last; x < w_; ++x) {
-        px[2 * x] = src[x];
-        px[2 * x + 1] = static_cast<std::uint32_t>(std::abs(below[x] - src[x]));
-      }
       const std::uint32_t* above = sums_.get() + static_cast<std::size_t>(y) * stride_ + 2;
       std::uint32_t* out = sums_.get() + static_cast<std::size_t>(y + 1) * stride_;
       out[0] = out[1] = 0;
       out += 2;
+      int x = 0;  // the row's pixels done
+#if defined(__SSE2__)
+      __m128i carry = _mm_setzero_si128();
+#if defined(__AVX512F__)
+      // Eight pixels (sixteen entries) at a time where AVX-512 is there, from the image's bytes:
+      // their grey levels and edge strengths interleaved in one register, the running sums within
+      // the eight in three shifted additions, then the row's running sum (the last pixel's pair,
+      // spread over the register) added: the same integers as below.
+      {
+        const __m512i zero = _mm512_setzero_si512();
+        const __m512i interleave = _mm512_set_epi32(15, 7, 14, 6, 13, 5, 12, 4, 11, 3, 10, 2, 9, 1, 8, 0);
+        const __m512i last_pair = _mm512_set_epi32(15, 14, 15, 14, 15, 14, 15, 14, 15, 14, 15, 14, 15, 14, 15, 14);
+        __m512i carry8 = _mm512_setzero_si512();
+        const auto bytes = [](const std::uint8_t* p) {
+          return _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
+        };
+        for (; x + 8 <= last; x += 8) {
+          const __m256i here = bytes(src + x), right = bytes(src + x + 1), down = bytes(below + x);
+          const __m256i edge = _mm256_add_epi32(_mm256_abs_epi32(_mm256_sub_epi32(right, here)),
+                                                _mm256_abs_epi32(_mm256_sub_epi32(down, here)));
+          __m512i v = _mm512_permutexvar_epi32(
+              interleave, _mm512_inserti64x4(_mm512_castsi256_si512(here), edge, 1));
+          v = _mm512_add_epi32(v, _mm512_alignr_epi32(v, zero, 14));
+          v = _mm512_add_epi32(v, _mm512_alignr_epi32(v, zero, 12));
+          v = _mm512_add_epi32(v, _mm512_alignr_epi32(v, zero, 8));
+          v = _mm512_add_epi32(v, carry8);
+          _mm512_storeu_si512(out + 2 * x, _mm512_add_epi32(v, _mm512_loadu_si512(above + 2 * x)));
+          carry8 = _mm512_permutexvar_epi32(last_pair, v);
+        }
+        carry = _mm512_castsi512_si128(carry8);
+      }
+#endif
+#endif
+      // The rest of the row's grey levels and edge strengths, interleaved like the sums.
+      std::uint32_t* px = pix.data();
+      for (int i = x; i < last; ++i) {
+        px[2 * i] = src[i];
+        px[2 * i + 1] =
+            static_cast<std::uint32_t>(std::abs(src[i + 1] - src[i]) + std::abs(below[i] - src[i]));
+      }
+      for (int i = std::max(x, last); i < w_; ++i) {
+        px[2 * i] = src[i];
+        px[2 * i + 1] = static_cast<std::uint32_t>(std::abs(below[i] - src[i]));
+      }
       std::uint32_t run = 0, run_edge = 0;
-      int x = 0;
 #if defined(__SSE2__)
       // Two pixels (four entries) at a time: the running sums of both pairs in one register. Four
       // pixels first, their sums within the four independent of the row's running sum, which
       // then waits on one addition per four pixels (not an addition and a shuffle per two).
-      __m128i carry = _mm_setzero_si128();
       for (; x + 4 <= w_; x += 4) {
         __m128i lo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(px + 2 * x));
         __m128i hi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(px + 2 * x + 4));
@@ -188,14 +222,21 @@ struct Scale {
   float edge_floor;    // the frame's noise's share of the mean edge strength (texture_noise_factor × noise)
 };
 
+// std::lround(t) for 0 <= t < 2^31, inline (the library call costs more than the rest of a scan
+// row's set-up): t - trunc(t) is exact.
+inline int roundHalfUp(double t) {
+  const int i = static_cast<int>(t);
+  return i + (t - i >= 0.5);
+}
+
 // `widen_px`: the surround's growth in x and y (the camera's exposure smear draws the ball out
 // over the left and right or the upper and lower cells of a square one).
 Scale scaleAt(double r, const BallProposerParams& p, float edge_floor,
               const Eigen::Vector2i& widen_px) {
   Scale s;
   s.edge_floor = edge_floor;
-  s.a = std::max(1, static_cast<int>(std::lround(p.inner_fraction * r)));
-  const int b = std::max(s.a + 1, static_cast<int>(std::lround(p.outer_fraction * r)));
+  s.a = std::max(1, roundHalfUp(p.inner_fraction * r));
+  const int b = std::max(s.a + 1, roundHalfUp(p.outer_fraction * r));
   s.bx = b + widen_px.x();
   s.by = b + widen_px.y();
   // In float, as it is used (powf is some three times faster than pow, and this runs per scan row).
@@ -309,37 +350,41 @@ RowBoxes rowBoxes(const Integrals& ii, int y, const Scale& sc) {
   return g;
 }
 
-// response() × boost where no box needs clamping, for up to kBatch positions of one scan row at
-// once: the corner values are gathered first, then every position's arithmetic runs in one loop
-// the compiler vectorises, without the branches of a sequential top-two search (mispredicted on
-// every other position). The same operations on the same values as response(), so the same floats.
+// response() × boost where no box needs clamping, for n positions of one scan row (their integral
+// entries col0, col0 + 2 step, ...; at most kBatch at a time): every position's corner values read
+// and its arithmetic done in one loop the compiler vectorises (kStep 1 or 2, the most common steps:
+// the reads strided by a stride known at compile time; 0: any step, gathered), without the branches
+// of a sequential top-two search (mispredicted on every other position). The same operations on
+// the same values as response() (where GCC contracts a multiplication and an addition into one
+// fused operation in one of them and not in the other, a response differs in its last bit).
 constexpr int kBatch = 32;
 
-void responsesInside(const RowBoxes& g, const int* cols, int n, const Scale& sc, float boost,
-                     float* resp, float* line) {
+template <int kStep>
+void responsesInside(const RowBoxes& g, int col0, int step, int n, const Scale& sc, float boost,
+                     float* __restrict resp, float* __restrict line) {
   const float texture_gain = sc.texture_gain, edge_floor = sc.edge_floor;
-  std::uint32_t v[16][kBatch];
-  std::uint32_t e[4][kBatch];
+  const int st = kStep > 0 ? 2 * kStep : 2 * step;
+  const std::uint32_t* __restrict r0 = g.rows[0];
+  const std::uint32_t* __restrict r1 = g.rows[1];
+  const std::uint32_t* __restrict r2 = g.rows[2];
+  const std::uint32_t* __restrict r3 = g.rows[3];
+  const int da = g.da, db = g.db;
+  float area[9];
+  for (int m = 0; m < 9; ++m) area[m] = g.area[m];
+  const float ring_area = g.ring_area, inner_area = g.inner_area;
   for (int k = 0; k < n; ++k) {
-    const int c[4] = {cols[k] - g.db, cols[k] - g.da, cols[k] + g.da, cols[k] + g.db};
-    for (int j = 0; j < 4; ++j) {
-      for (int i = 0; i < 4; ++i) v[4 * j + i][k] = g.rows[j][c[i]];
-    }
-    e[0][k] = g.rows[1][c[1] + 1];
-    e[1][k] = g.rows[1][c[2] + 1];
-    e[2][k] = g.rows[2][c[1] + 1];
-    e[3][k] = g.rows[2][c[2] + 1];
-  }
-  for (int k = 0; k < n; ++k) {
+    const int c = col0 + st * k;
+    const int c0 = c - db, c1 = c - da, c2 = c + da, c3 = c + db;
+    const std::uint32_t v[16] = {r0[c0], r0[c1], r0[c2], r0[c3], r1[c0], r1[c1], r1[c2], r1[c3],
+                                 r2[c0], r2[c1], r2[c2], r2[c3], r3[c0], r3[c1], r3[c2], r3[c3]};
     float mean[9];
     std::uint32_t sums[9];
     for (int j = 0; j < 3; ++j) {
       for (int i = 0; i < 3; ++i) {
-        sums[3 * j + i] = v[4 * (j + 1) + i + 1][k] - v[4 * j + i + 1][k] - v[4 * (j + 1) + i][k] +
-                          v[4 * j + i][k];
+        sums[3 * j + i] = v[4 * (j + 1) + i + 1] - v[4 * j + i + 1] - v[4 * (j + 1) + i] + v[4 * j + i];
       }
     }
-    for (int m = 0; m < 9; ++m) mean[m] = static_cast<float>(sums[m]) / g.area[m];
+    for (int m = 0; m < 9; ++m) mean[m] = static_cast<float>(sums[m]) / area[m];
     // The four opposite pairs' darker cells; the largest and the second largest of them.
     const float m0 = std::min(mean[3], mean[5]), m1 = std::min(mean[1], mean[7]);
     const float m2 = std::min(mean[0], mean[8]), m3 = std::min(mean[2], mean[6]);
@@ -348,14 +393,14 @@ void responsesInside(const RowBoxes& g, const int* cols, int n, const Scale& sc,
     const float first = std::max(hi01, hi23);
     const float second = std::max(std::min(hi01, hi23), std::max(lo01, lo23));
     float on_line = mean[4] - second;
-    const std::uint32_t outer_sum = v[15][k] - v[3][k] - v[12][k] + v[0][k];
-    const float ring = static_cast<float>(outer_sum - sums[4]) / g.ring_area;
+    const std::uint32_t outer_sum = v[15] - v[3] - v[12] + v[0];
+    const float ring = static_cast<float>(outer_sum - sums[4]) / ring_area;
     const float surround = std::max(first, ring);
     float dog = mean[4] - surround;
     // (with texture_gain 0 the term is +0, which changes no response: no branch in the loop; with
     // edge_floor 0, max(0, x - 0) is x)
-    const std::uint32_t edge_sum = e[3][k] - e[1][k] - e[2][k] + e[0][k];
-    const float edges = std::max(0.f, static_cast<float>(edge_sum) / g.inner_area - edge_floor);
+    const std::uint32_t edge_sum = r2[c2 + 1] - r1[c2 + 1] - r2[c1 + 1] + r1[c1 + 1];
+    const float edges = std::max(0.f, static_cast<float>(edge_sum) / inner_area - edge_floor);
     const float texture = texture_gain * edges;
     dog += texture;
     on_line += texture;
@@ -386,6 +431,27 @@ struct CentringScratch {
 inline int floorToInt(double t) {
   const int i = static_cast<int>(t);  // towards zero
   return i - (t < static_cast<double>(i));
+}
+
+// The grid cell (with its border) of each strong pixel's vote at signed distance sign_rr along its
+// gradient, or `trash` when the vote falls outside the grid. kUnitCell: cells of one pixel, the
+// division by 1 left out (which changes nothing).
+template <bool kUnitCell>
+void voteCells(const int* __restrict sx, const int* __restrict sy, const double* __restrict ux,
+               const double* __restrict uy, int m, double sign_rr, double x, double y, double cell_d,
+               int half, int n, int w, int trash, int* __restrict cv) {
+  for (int k = 0; k < m; ++k) {
+    double cx = sx[k] + 0.5 + sign_rr * ux[k] - x, cy = sy[k] + 0.5 + sign_rr * uy[k] - y;
+    if (!kUnitCell) {
+      cx /= cell_d;
+      cy /= cell_d;
+    }
+    const int i = floorToInt(cx + 0.5) + half;
+    const int j = floorToInt(cy + 0.5) + half;
+    const bool in = static_cast<unsigned>(i) < static_cast<unsigned>(n) &&
+                    static_cast<unsigned>(j) < static_cast<unsigned>(n);
+    cv[k] = in ? (j + 1) * w + i + 1 : trash;
+  }
 }
 
 Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, double r, const BallProposerParams& p,
@@ -459,14 +525,11 @@ Eigen::Vector2d centreFromEdges(const GrayView& image, double x, double y, doubl
   for (int v = 0; v < 6; ++v) {
     const double sign_rr = (v % 2 == 0 ? 1.0 : -1.0) * radii[v / 2];
     int* cv = cells + static_cast<std::size_t>(v) * m;
-    for (int k = 0; k < m; ++k) {
-      const double cx = sx[k] + 0.5 + sign_rr * ux[k] - x, cy = sy[k] + 0.5 + sign_rr * uy[k] - y;
-      // (a division by 1 changes nothing)
-      const int i = floorToInt(cx / cell_d + 0.5) + half;
-      const int j = floorToInt(cy / cell_d + 0.5) + half;
-      const bool in = static_cast<unsigned>(i) < static_cast<unsigned>(n) &&
-                      static_cast<unsigned>(j) < static_cast<unsigned>(n);
-      cv[k] = in ? (j + 1) * w + i + 1 : trash + v;
+    // (cells of one pixel, the most common: the division by 1 left out, which changes nothing)
+    if (cell == 1) {
+      voteCells<true>(sx, sy, ux, uy, m, sign_rr, x, y, 1.0, half, n, w, trash + v, cv);
+    } else {
+      voteCells<false>(sx, sy, ux, uy, m, sign_rr, x, y, cell_d, half, n, w, trash + v, cv);
     }
   }
   for (int k = 0; k < m; ++k) {
@@ -644,6 +707,7 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   }
   const float edge_floor = static_cast<float>(p.texture_noise_factor * noise);
   std::vector<ScanRect> rects;
+  rects.reserve(regions.mask.size() + (robots != nullptr ? robots->size() : 0));
   const int s = regions.window_px;
   for (int r = 0; r < regions.rows; ++r) {
     for (int c = 0; c < regions.columns; ++c) {
@@ -700,6 +764,8 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
   std::vector<Candidate> candidates;
   std::vector<Candidate> line_candidates;
   std::vector<Candidate> best;
+  candidates.reserve(rects.size() * static_cast<std::size_t>(p.per_window_count));
+  line_candidates.reserve(rects.size());
   const int keep = p.per_window_count;
   for (std::size_t k = 0; k < rects.size(); ++k) {
     const ScanRect& rc = rects[k];
@@ -729,20 +795,18 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
       const int x_start = coarse ? (rc.x0 + rc.x1) / 2 : rc.x0 + (step - 1) / 2;
       const int yy = coarse && y == rc.y0 ? (rc.y0 + rc.y1) / 2
                                           : std::min(y + (step - 1) / 2, rc.y1 - 1);
-      // No box of this row needs clamping: the fast path (the print term needs the general one).
-      const bool inside = p.print_weight <= 0 && x_start - scale.bx >= rx0 &&
-                          rc.x1 - 1 + scale.bx <= rx1 && yy - scale.by >= ry0 &&
-                          yy + scale.by <= ry1;
       const float boost = static_cast<float>(rc.boost);
       // The centre box's mean carries the frame's noise over its (2 a)^2 pixels: responses count
       // net of response_noise_factor such deviations (0 without noise: x - 0 is x).
       const float margin = static_cast<float>(p.response_noise_factor * noise / (2 * scale.a));
-      const auto consider = [&](int x, float resp, float line_resp) {
-        resp -= margin;
+      const auto consider_line = [&](int x, float line_resp) {
         line_resp -= margin;
         if (p.line_count > 0 && line_resp > best_line.response) {
           best_line = {x + 0.5f, yy + 0.5f, static_cast<float>(r), line_resp};
         }
+      };
+      const auto consider_ball = [&](int x, float resp) {
+        resp -= margin;
         if (resp < min_response) return;
         const Candidate cand{x + 0.5f, yy + 0.5f, static_cast<float>(r), resp};
         if (static_cast<int>(best.size()) < keep) {
@@ -754,30 +818,67 @@ std::vector<BallProposal> BallProposer::run(const GrayView& image, const CameraM
           if (cand.response > weakest->response) *weakest = cand;
         }
       };
-      if (inside) {
-        const RowBoxes boxes = rowBoxes(ii, yy, scale);
-        int xs[kBatch], cols[kBatch];
-        float resps[kBatch], lines[kBatch];
-        int x = x_start;
-        while (x < rc.x1) {
-          int n = 0;
-          for (; x < rc.x1 && n < kBatch; x += step) {
-            if (!ignore.looked(x, yy)) continue;
-            xs[n] = x;
-            cols[n] = ii.col(x);
-            ++n;
-          }
-          responsesInside(boxes, cols, n, scale, boost, resps, lines);
-          for (int k = 0; k < n; ++k) consider(xs[k], resps[k], lines[k]);
-        }
-      } else {
-        for (int x = x_start; x < rc.x1; x += step) {
+      const auto consider = [&](int x, float resp, float line_resp) {
+        consider_line(x, line_resp);
+        consider_ball(x, resp);
+      };
+      // The positions k of the row (x = x_start + k step) whose boxes need no clamping, [fast0,
+      // fast1), take the fast path (the print term needs the general one); the others, at the
+      // region's border, response().
+      const int count = (rc.x1 - x_start + step - 1) / step;
+      int fast0 = count, fast1 = count;
+      if (p.print_weight <= 0 && yy - scale.by >= ry0 && yy + scale.by <= ry1) {
+        const int lo = rx0 + scale.bx - x_start, hi = rx1 - scale.bx - x_start;  // x - x_start
+        fast0 = lo <= 0 ? 0 : std::min(count, (lo + step - 1) / step);
+        fast1 = hi < 0 ? fast0 : std::clamp(hi / step + 1, fast0, count);
+      }
+      const auto general = [&](int k0, int k1) {
+        for (int k = k0; k < k1; ++k) {
+          const int x = x_start + k * step;
           if (!ignore.looked(x, yy)) continue;
           float line_resp = 0;
           const float resp = response(ii, x, yy, scale, p, &line_resp) * boost;
           consider(x, resp, line_resp);
         }
+      };
+      general(0, fast0);
+      if (fast1 > fast0) {
+        const RowBoxes boxes = rowBoxes(ii, yy, scale);
+        float resps[kBatch], lines[kBatch];
+        for (int k0 = fast0; k0 < fast1; k0 += kBatch) {
+          const int n = std::min(kBatch, fast1 - k0);
+          const int x0 = x_start + k0 * step;
+          const int col0 = ii.col(x0);
+          if (step == 1) {
+            responsesInside<1>(boxes, col0, step, n, scale, boost, resps, lines);
+          } else if (step == 2) {
+            responsesInside<2>(boxes, col0, step, n, scale, boost, resps, lines);
+          } else {
+            responsesInside<0>(boxes, col0, step, n, scale, boost, resps, lines);
+          }
+          if (keep == 1) {
+            // One candidate a window: of each run of positions only the first of its strongest
+            // responses and the first of its strongest line responses can become it (an equal one
+            // later does not replace it), so they alone are considered, in the order of the runs.
+            int ball_k = -1, line_k = -1;
+            float ball_max = 0, line_max = 0;
+            for (int k = 0; k < n; ++k) {
+              if (!ignore.looked(x0 + k * step, yy)) continue;
+              const float b = resps[k] - margin, l = lines[k] - margin;
+              if (ball_k < 0 || b > ball_max) ball_max = b, ball_k = k;
+              if (line_k < 0 || l > line_max) line_max = l, line_k = k;
+            }
+            if (line_k >= 0) consider_line(x0 + line_k * step, lines[line_k]);
+            if (ball_k >= 0) consider_ball(x0 + ball_k * step, resps[ball_k]);
+          } else {
+            for (int k = 0; k < n; ++k) {
+              const int x = x0 + k * step;
+              if (ignore.looked(x, yy)) consider(x, resps[k], lines[k]);
+            }
+          }
+        }
       }
+      general(fast1, count);
       y += step;
     }
     candidates.insert(candidates.end(), best.begin(), best.end());
