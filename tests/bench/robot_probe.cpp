@@ -87,6 +87,8 @@ int probe(int argc, char** argv) {
   env("RD_SHIFT", config.robot_detector.wide_group_shift_width_fraction);
   env("RD_SHIFTMIN", config.robot_detector.wide_group_min_shift_confidence);
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
+  env("RD_VETO", config.robot_detector.behind_net_veto_confidence);
+  env("RD_BEHINDPART", config.robot_detector.behind_lower_part_fraction);
   env("RD_MIRLO", config.robot_detector.mirror_min_confidence);
   env("RD_MIRHI", config.robot_detector.mirror_max_confidence);
   env("RD_AREA", config.robot_detector.area_min_patch_widths);
