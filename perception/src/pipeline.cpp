@@ -161,8 +161,19 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
     robot_detector_ms = elapsedMs([&] {
       std::vector<RobotProposal> classified;
       std::vector<float> confidences;
+      // The robots tracked over the frames before (explicit state: the caller's tracks).
+      std::vector<Eigen::Vector2d> tracked;
+      if (tracks) {
+        for (const RobotTracks::Track& t : tracks->tracks) {
+          if (t.hits >= config_.robot_detector.track_prior_min_hits &&
+              frame.time_s - t.last_seen_s <= config_.robot_orientation.track_expiry_s) {
+            tracked.push_back(t.position_in_robot);
+          }
+        }
+      }
       frame.robot_percepts = robot_detector_->run(image, frame.camera, proposals.proposals,
-                                                  proposals.held_back, &classified, &confidences);
+                                                  proposals.held_back, &classified, &confidences,
+                                                  &tracked);
       frame.robot_proposals = std::move(classified);
       frame.robot_net_confidences = std::move(confidences);
     });

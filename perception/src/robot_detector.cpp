@@ -53,6 +53,9 @@ RobotDetectorParams RobotDetectorParams::load(const std::string& path) {
   p.feet_to_centre_m = f.getInRange("feet_to_centre_m", 0, 0.3);
   p.ball_feet_radii = f.getInRange("ball_feet_radii", 0, 10);
   p.ball_feet_max_confidence = f.getInRange("ball_feet_max_confidence", 0, 1);
+  p.track_prior_odds = f.getInRange("track_prior_odds", 1, 1000);
+  p.track_prior_min_hits = static_cast<int>(f.getInRange("track_prior_min_hits", 1, 1000));
+  p.track_prior_distance_m = f.getInRange("track_prior_distance_m", 0, 5);
   f.finish();
   return p;
 }
@@ -500,7 +503,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
                                              const std::vector<RobotProposal>& proposals,
                                              const std::vector<HeldBackRobotProposal>& held_back,
                                              std::vector<RobotProposal>* classified,
-                                             std::vector<float>* confidences) const {
+                                             std::vector<float>* confidences,
+                                             const std::vector<Eigen::Vector2d>* tracked_in_robot) const {
   std::vector<RobotProposal> seen = proposals;
   std::vector<float> robot;
   // RobotNet's input per box seen (RobotFeetNet's first look reuses it).
@@ -544,6 +548,23 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   classify(robot.size());
   std::vector<bool> searched(seen.size(), false);
   searchFeet(image, camera, seen, proposals.size(), robot, patches, searched);
+  // A box where a tracked robot stands: its odds times track_prior_odds (RobotNet's own scores kept
+  // for `confidences`).
+  std::optional<std::vector<float>> robot_net_scores;
+  if (tracked_in_robot && !tracked_in_robot->empty() && params_.track_prior_odds > 1) {
+    if (confidences) robot_net_scores = robot;
+    const double k = params_.track_prior_odds;
+    const double reach2 = params_.track_prior_distance_m * params_.track_prior_distance_m;
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+      const auto g = robotGroundPoint(camera, seen[i].feet_px, params_.feet_to_centre_m);
+      if (!g) continue;
+      bool near = false;
+      for (const Eigen::Vector2d& t : *tracked_in_robot) near |= (t - *g).squaredNorm() <= reach2;
+      if (!near) continue;
+      const double c = robot[i];
+      robot[i] = static_cast<float>(k * c / (k * c + (1 - c)));
+    }
+  }
   std::vector<PixelBox> proposal_boxes;
   proposal_boxes.reserve(seen.size());
   for (const RobotProposal& p : seen) proposal_boxes.push_back(p.box);
@@ -566,9 +587,8 @@ std::vector<RobotPercept> RobotDetector::run(const GrayView& image, const Camera
   // RobotBehindNet, trained with such boxes too, looks at them as well: one it scores under
   // behind_net_veto_confidence is no robot (score 0 for the bars and rules below; `confidences`
   // keeps RobotNet's).
-  std::optional<std::vector<float>> robot_net_scores;
   if (behind_net_ && params_.behind_net_veto_confidence > 0) {
-    if (confidences) robot_net_scores = robot;
+    if (confidences && !robot_net_scores) robot_net_scores = robot;
     std::vector<std::size_t> nested;
     std::vector<RobotProposal> nested_boxes;
     for (std::size_t i = 0; i < seen.size(); ++i) {

@@ -963,6 +963,7 @@ void updateRobotTracks(RobotTracks& tracks, std::vector<RobotPercept>& robots, d
     RobotTracks::Track& t = list[robot_track[i]];
     t.position_in_robot = *r.position_in_robot;
     t.last_seen_s = time_s;
+    ++t.hits;
     r.track_id = t.id;
     r.orientation_filtered = updateOrientationTrack(t.orientation, r.orientation_raw, time_s, filter);
   }

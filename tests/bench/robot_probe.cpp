@@ -87,6 +87,9 @@ int probe(int argc, char** argv) {
   env("RD_SHIFT", config.robot_detector.wide_group_shift_width_fraction);
   env("RD_SHIFTMIN", config.robot_detector.wide_group_min_shift_confidence);
   env("RD_BEHIND", config.robot_detector.min_behind_robot_confidence);
+  env("RD_TRACK", config.robot_detector.track_prior_odds);
+  env("RD_TRACKHITS", config.robot_detector.track_prior_min_hits);
+  env("RD_TRACKDIST", config.robot_detector.track_prior_distance_m);
   env("RD_VETO", config.robot_detector.behind_net_veto_confidence);
   env("RD_BEHINDPART", config.robot_detector.behind_lower_part_fraction);
   env("RD_MIRLO", config.robot_detector.mirror_min_confidence);
@@ -137,6 +140,7 @@ int probe(int argc, char** argv) {
     runner.runCase(c, frames, true, [&](const sim::RenderedFrame& f) {
       const FrameTruth truth = computeFrameTruth(f.truth, markings, dims, scoring);
       Frame frame(f.image.view(), f.perception_camera);
+      frame.time_s = f.truth.time_s;  // as colorfree run: the tracks expire by it
       pipeline.process(frame, nullptr, &tracks);
       // The perception's camera for the proposer; the true one for matching, as the scorer does.
       const CameraModel& cam = f.truth.camera.model;

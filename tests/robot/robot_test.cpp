@@ -1244,6 +1244,40 @@ TEST(RobotDetector, FeetSearchMovesARejectedBoxToTheRobotsFeet) {
   }
 }
 
+TEST(RobotDetector, ARobotTrackedThereLiftsAnUnsureBoxOverTheBar) {
+  // A stand-in RobotNet that scores every patch 0.4, under the bar of 0.5: with a robot tracked at
+  // the box's ground point and odds x 2 it is 0.57 and detected; tracked a metre away, or with the
+  // prior off, not. RobotNet's own score stays in `confidences`.
+  const CameraModel cam = testCamera();
+  const FieldDimensions dims = FieldDimensions::loadDefault();
+  const RobotProposal box = proposerShapedBox(cam, {320, 330});
+  cnn::Net constant = wholePatchNet(2, "constant net");
+  constant.params()[1] = static_cast<float>(std::log(0.4 / 0.6));
+  RobotDetectorParams params;
+  params.shin_gap_height_fraction = 0;
+  params.track_prior_odds = 2;
+  const RobotDetector detector(params, cnn::Classifier(constant), dims);
+  const GrayImage img = carpet(13);
+  const auto ground = robotGroundPoint(cam, box.feet_px, params.feet_to_centre_m);
+  ASSERT_TRUE(ground.has_value());
+  const auto runWith = [&](const RobotDetector& d, const std::vector<Eigen::Vector2d>* tracked,
+                           std::vector<float>& confidences) {
+    return d.run(img.view(), cam, {box}, {}, nullptr, &confidences, tracked);
+  };
+  std::vector<float> confidences;
+  EXPECT_TRUE(runWith(detector, nullptr, confidences).empty());
+  const std::vector<Eigen::Vector2d> here{*ground + Eigen::Vector2d(0.1, -0.1)};
+  const auto found = runWith(detector, &here, confidences);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_NEAR(found[0].confidence, 0.8 / 1.4, 1e-4);
+  ASSERT_EQ(confidences.size(), 1u);
+  EXPECT_NEAR(confidences[0], 0.4, 1e-4);
+  const std::vector<Eigen::Vector2d> away{*ground + Eigen::Vector2d(1.0, 0)};
+  EXPECT_TRUE(runWith(detector, &away, confidences).empty());
+  params.track_prior_odds = 1;
+  EXPECT_TRUE(runWith(RobotDetector(params, cnn::Classifier(constant), dims), &here, confidences).empty());
+}
+
 TEST(RobotDetector, AnUnsureBoxIsScoredByTheMeanOfItsLookAndItsMirroredLook) {
   // A box bright on its left half only, and a stand-in net that tells left from right: its robot
   // logit is beta + a x (the left half's mean - the right half's) / 2 of the patch (unit range).
@@ -2223,6 +2257,16 @@ TEST(RobotTracks, AssociatesOverFramesAndExpires) {
   EXPECT_NE(f2[2].track_id, f1[1].track_id);
   ASSERT_TRUE(f2[1].orientation_filtered.has_value());
   EXPECT_FALSE(f2[2].orientation_filtered.has_value());
+  // Each track counts its frames with a percept (the detector's track prior asks for some).
+  const auto hitsOf = [&](int id) {
+    for (const RobotTracks::Track& t : tracks.tracks) {
+      if (t.id == id) return t.hits;
+    }
+    return -1;
+  };
+  EXPECT_EQ(hitsOf(f2[0].track_id), 2);
+  EXPECT_EQ(hitsOf(f2[1].track_id), 2);
+  EXPECT_EQ(hitsOf(f2[2].track_id), 1);
   // Long after: the old tracks expired, the same place starts a new track.
   std::vector<RobotPercept> f3{percept(1.0, 0.0, 0.5)};
   updateRobotTracks(tracks, f3, 5.0, 0.5, filter);

@@ -126,6 +126,13 @@ struct RobotDetectorParams {
   /// stands behind it and goes (see RobotDetector::liftOffBalls; 0 radii: never).
   double ball_feet_radii = 1.5;
   double ball_feet_max_confidence = 1.0;
+  /// Tracked robots (the caller's RobotTracks, seen in at least track_prior_min_hits frames): a
+  /// box whose ground point lies within track_prior_distance_m of one has its RobotNet odds
+  /// multiplied by this for every bar and rule (a robot seen there a moment ago is likely still
+  /// there; 1: off). `confidences` stay RobotNet's own.
+  double track_prior_odds = 2.0;
+  int track_prior_min_hits = 2;
+  double track_prior_distance_m = 0.3;
 
   bool operator==(const RobotDetectorParams&) const = default;
   static RobotDetectorParams load(const std::string& path);
@@ -193,11 +200,14 @@ class RobotDetector {
   /// min_held_back_confidence; the others (behind a robot) as min_behind_robot_confidence says.
   /// `classified` (optional) gets every proposal RobotNet saw: `proposals`, then those held-back
   /// ones; `confidences` RobotNet's output for each (RobotBehindNet's veto aside).
+  /// `tracked_in_robot` (optional): the ground points of the robots the caller tracks (see
+  /// track_prior_odds).
   std::vector<RobotPercept> run(const GrayView& image, const CameraModel& camera,
                                 const std::vector<RobotProposal>& proposals,
                                 const std::vector<HeldBackRobotProposal>& held_back,
                                 std::vector<RobotProposal>* classified,
-                                std::vector<float>* confidences = nullptr) const;
+                                std::vector<float>* confidences = nullptr,
+                                const std::vector<Eigen::Vector2d>* tracked_in_robot = nullptr) const;
   /// Once the ball is detected: each percept whose feet point lies on a ball (see
   /// ball_feet_radii, ball_feet_max_confidence) is looked at again by RobotNet with its feet at
   /// the ball's top; it stays there (box, feet, confidence, ground point) when RobotNet gives that

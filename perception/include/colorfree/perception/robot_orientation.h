@@ -144,6 +144,7 @@ struct RobotTracks {
     int id = 0;
     Eigen::Vector2d position_in_robot = Eigen::Vector2d::Zero();
     double last_seen_s = 0;
+    int hits = 0;  ///< frames with a percept
     OrientationTrack orientation;
   };
   std::vector<Track> tracks;
