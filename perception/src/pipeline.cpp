@@ -162,15 +162,10 @@ void Pipeline::process(Frame& frame, PipelineStats* stats, RobotTracks* tracks) 
       std::vector<RobotProposal> classified;
       std::vector<float> confidences;
       // The robots tracked over the frames before (explicit state: the caller's tracks).
-      std::vector<Eigen::Vector2d> tracked;
-      if (tracks) {
-        for (const RobotTracks::Track& t : tracks->tracks) {
-          if (t.hits >= config_.robot_detector.track_prior_min_hits &&
-              frame.time_s - t.last_seen_s <= config_.robot_orientation.track_expiry_s) {
-            tracked.push_back(t.position_in_robot);
-          }
-        }
-      }
+      const std::vector<Eigen::Vector2d> tracked =
+          tracks ? trackedRobots(*tracks, frame.time_s, config_.robot_detector.track_prior_min_hits,
+                                 config_.robot_orientation.track_expiry_s)
+                 : std::vector<Eigen::Vector2d>{};
       frame.robot_percepts = robot_detector_->run(image, frame.camera, proposals.proposals,
                                                   proposals.held_back, &classified, &confidences,
                                                   &tracked);

@@ -918,13 +918,26 @@ void RobotOrientationEstimator::run(const GrayView& image, const CameraModel& ca
   updateRobotTracks(tracks, robots, time_s, params_.track_max_distance_m, filter);
 }
 
+namespace {
+bool expired(const RobotTracks::Track& t, double time_s, double expiry_s) {
+  return time_s - t.last_seen_s > expiry_s;
+}
+}  // namespace
+
+std::vector<Eigen::Vector2d> trackedRobots(const RobotTracks& tracks, double time_s, int min_hits,
+                                           double expiry_s) {
+  std::vector<Eigen::Vector2d> out;
+  for (const RobotTracks::Track& t : tracks.tracks) {
+    if (t.hits >= min_hits && !expired(t, time_s, expiry_s)) out.push_back(t.position_in_robot);
+  }
+  return out;
+}
+
 void updateRobotTracks(RobotTracks& tracks, std::vector<RobotPercept>& robots, double time_s,
                        double max_distance_m, const OrientationFilterParams& filter) {
   auto& list = tracks.tracks;
   list.erase(std::remove_if(list.begin(), list.end(),
-                            [&](const RobotTracks::Track& t) {
-                              return time_s - t.last_seen_s > filter.expiry_s;
-                            }),
+                            [&](const RobotTracks::Track& t) { return expired(t, time_s, filter.expiry_s); }),
              list.end());
   // Greedy nearest-first association.
   struct Pair {

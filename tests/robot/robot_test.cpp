@@ -2267,6 +2267,13 @@ TEST(RobotTracks, AssociatesOverFramesAndExpires) {
   EXPECT_EQ(hitsOf(f2[0].track_id), 2);
   EXPECT_EQ(hitsOf(f2[1].track_id), 2);
   EXPECT_EQ(hitsOf(f2[2].track_id), 1);
+  // The detector's tracked robots: seen in 2 frames (not the new one), and not expired.
+  const auto tracked = trackedRobots(tracks, 0.2, 2, 1.0);
+  ASSERT_EQ(tracked.size(), 2u);
+  EXPECT_TRUE(trackedRobots(tracks, 0.2, 3, 1.0).empty());
+  EXPECT_EQ(trackedRobots(tracks, 0.2, 1, 1.0).size(), 3u);
+  EXPECT_TRUE(trackedRobots(tracks, 1.2, 1, 1.0).empty());
+  EXPECT_EQ(trackedRobots(tracks, 1.05, 1, 1.0).size(), 3u);
   // Long after: the old tracks expired, the same place starts a new track.
   std::vector<RobotPercept> f3{percept(1.0, 0.0, 0.5)};
   updateRobotTracks(tracks, f3, 5.0, 0.5, filter);

@@ -187,4 +187,10 @@ class RobotOrientationEstimator {
 void updateRobotTracks(RobotTracks& tracks, std::vector<RobotPercept>& robots, double time_s,
                        double max_distance_m, const OrientationFilterParams& filter);
 
+/// The ground points of the tracks seen in at least `min_hits` frames and, at `time_s`, not
+/// unseen for longer than `expiry_s` (those updateRobotTracks would still keep): the robots the
+/// detector's track prior lifts.
+std::vector<Eigen::Vector2d> trackedRobots(const RobotTracks& tracks, double time_s, int min_hits,
+                                           double expiry_s);
+
 }  // namespace colorfree
