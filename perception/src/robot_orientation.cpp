@@ -53,6 +53,8 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.field_line_margin_px = f.getInRange("field_line_margin_px", 0, 50);
   p.field_line_min_length_m = f.getInRange("field_line_min_length_m", 0, 20);
   p.field_line_min_angle_deg = f.getInRange("field_line_min_angle_deg", 0, 90);
+  p.field_line_sole_max_gray_ratio = f.getInRange("field_line_sole_max_gray_ratio", 0, 1);
+  p.field_line_sole_max_height_fraction = f.getInRange("field_line_sole_max_height_fraction", 0, 1);
   p.region_margin_fraction = f.getInRange("region_margin_fraction", 0, 2);
   p.region_above_fraction = f.getInRange("region_above_fraction", 0, 2);
   p.region_below_fraction = f.getInRange("region_below_fraction", 0, 2);
@@ -511,7 +513,8 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   // ends there). An edge with no more than the carpet above it is a cast shadow's upper edge or
   // the carpet's texture, not the feet (white, or lit gray, above the carpet or the dark panels).
   double min_above_gray = 0, carpet_gray = 0;
-  if (p.silhouette_min_above_carpet_ratio > 0 || p.dark_panel_max_gray_ratio > 0) {
+  if (p.silhouette_min_above_carpet_ratio > 0 || p.dark_panel_max_gray_ratio > 0 ||
+      p.field_line_sole_max_gray_ratio > 0) {
     // The median by a histogram of the gray levels: the same value as sorting them. Counted in
     // four histograms, by a column's place in the list, so that neighbouring columns of the same
     // gray do not wait on each other's increments; summed after.
@@ -693,8 +696,15 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
   const std::optional<Eigen::Vector2d> feet_ground = camera.pixelToGround(robot.feet_px);
   const FieldMarkingsAtFeet markings(p, field, camera, feet_ground, x_left, x_right, y_top, y_bottom,
                                      line_half_width_m_, centre_circle_radius_m_);
+  // A sole's dark stripe under the feet's edge: thin, darker than the carpet, lighter below it,
+  // inside the feet region.
+  const DarkPanel sole{p.field_line_sole_max_gray_ratio * carpet_gray, 1,
+                       std::max(1, static_cast<int>(p.field_line_sole_max_height_fraction * h)),
+                       y_bottom};
   const auto onFieldLine = [&](const Hit& hit) {
-    return markings.covers(camera, {scan_x[hit.column] + 0.5, hit.row + 0.5});
+    if (!markings.covers(camera, {scan_x[hit.column] + 0.5, hit.row + 0.5})) return false;
+    return p.field_line_sole_max_gray_ratio <= 0 ||
+           belowDarkPanel(image, scan_x[hit.column], hit.row, sole) == hit.row;
   };
   for (int c = 0; c < columns; ++c) {
     first_hit.push_back(static_cast<int>(hits.size()));

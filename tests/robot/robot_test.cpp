@@ -2051,6 +2051,55 @@ TEST(LinesGenerator, ADetectedFieldLineInFrontOfTheFeetIsNoSilhouette) {
   }
 }
 
+// A robot standing on a field line: the feet's near edge lies over the line, a dark sole right
+// below it and the line's white below that. Dropping every edge on the detected line drops the
+// feet's too (the silhouette there is gone); the sole's thin dark stripe under an edge tells it is
+// the feet's, and it stays: the block's near edge is the first line.
+TEST(LinesGenerator, AFeetEdgeOverADetectedFieldLineWithASoleBelowStays) {
+  const CameraModel cam = testCamera();
+  const Eigen::Vector2d centre(1.2, 0.0);
+  const double near_x = centre.x() - 0.08;  // the block's near face, over the line's middle
+  const auto px = [&](double x, double y, double z = 0) {
+    const auto q = cam.robotToPixel({x, y, z});
+    return cv::Point(int(std::lround(q->x())), int(std::lround(q->y())));
+  };
+  GrayImage img = carpet(17);
+  cv::Mat m = wrap(img);
+  cv::fillConvexPoly(m, std::vector<cv::Point>{px(near_x - 0.025, -1.5), px(near_x - 0.025, 1.5),
+                                               px(near_x + 0.025, 1.5), px(near_x + 0.025, -1.5)},
+                     cv::Scalar(200));
+  const std::vector<cv::Point> hull = footBlockHull(cam, centre, 0);
+  cv::fillConvexPoly(m, hull, cv::Scalar(200));
+  // The sole: the near face's lowest 8 mm, near black.
+  cv::fillConvexPoly(m, std::vector<cv::Point>{px(near_x, -0.1), px(near_x, 0.1), px(near_x, 0.1, 0.008),
+                                               px(near_x, -0.1, 0.008)},
+                     cv::Scalar(15));
+  const RobotPercept robot = perceptOfBlock(cam, hull, centre);
+  LinePercept line;
+  line.start_in_robot = {near_x, -1.5};
+  line.end_in_robot = {near_x, 1.5};
+  line.start_px = *cam.robotToPixel({near_x, -1.5, 0});
+  line.end_px = *cam.robotToPixel({near_x, 1.5, 0});
+  FieldFeatures field;
+  field.lines = {line};
+  const int sole_top = px(near_x, 0.0, 0.008).y;
+  const int left = px(near_x, 0.1).x, right = px(near_x, -0.1).x;
+  const auto onNearEdge = [&](const Eigen::Vector2d& q) {
+    return q.x() > left && q.x() < right && std::abs(q.y() - sole_top) <= 3;
+  };
+  RobotOrientationParams params = RobotOrientationParams::loadDefault();
+  ASSERT_GT(params.field_line_sole_max_gray_ratio, 0);
+  const RobotLines kept = untrainedEstimator(params).findLines(img.view(), cam, robot, field);
+  EXPECT_GT(std::count_if(kept.silhouette_px.begin(), kept.silhouette_px.end(), onNearEdge), 0.8 * (right - left));
+  ASSERT_FALSE(kept.regions.empty());
+  const LineHypothesis& first = kept.regions[0].line_in_robot;
+  EXPECT_GT(std::abs(first.direction().y()), std::cos(5 * std::numbers::pi / 180));
+  EXPECT_NEAR((first.a + first.b).x() / 2, near_x, 0.03);
+  params.field_line_sole_max_gray_ratio = 0;
+  const RobotLines dropped = untrainedEstimator(params).findLines(img.view(), cam, robot, field);
+  EXPECT_LT(std::count_if(dropped.silhouette_px.begin(), dropped.silhouette_px.end(), onNearEdge), 0.2 * (right - left));
+}
+
 // OriNet looks at each region as it is and mirrored, the mirrored look's side classes swapped: a
 // stand-in OriNet that says "side facing left" more surely when a region's left half is the
 // brighter (logit 2 as it is, 1 mirrored, against 0 for the front) gives a side region of unknown
