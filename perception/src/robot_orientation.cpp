@@ -54,6 +54,7 @@ RobotOrientationParams RobotOrientationParams::load(const std::string& path) {
   p.field_line_min_length_m = f.getInRange("field_line_min_length_m", 0, 20);
   p.field_line_min_angle_deg = f.getInRange("field_line_min_angle_deg", 0, 90);
   p.field_line_sole_max_gray_ratio = f.getInRange("field_line_sole_max_gray_ratio", 0, 1);
+  p.field_line_sole_min_box_height_px = f.getInRange("field_line_sole_min_box_height_px", 0, 4000);
   p.field_line_sole_max_height_fraction = f.getInRange("field_line_sole_max_height_fraction", 0, 1);
   p.region_margin_fraction = f.getInRange("region_margin_fraction", 0, 2);
   p.region_above_fraction = f.getInRange("region_above_fraction", 0, 2);
@@ -698,13 +699,12 @@ RobotLines RobotOrientationEstimator::findLines(const GrayView& image, const Cam
                                      line_half_width_m_, centre_circle_radius_m_);
   // A sole's dark stripe under the feet's edge: thin, darker than the carpet, lighter below it,
   // inside the feet region.
+  const bool sole_seen = p.field_line_sole_max_gray_ratio > 0 && h >= p.field_line_sole_min_box_height_px;
   const DarkPanel sole{p.field_line_sole_max_gray_ratio * carpet_gray, 1,
-                       std::max(1, static_cast<int>(p.field_line_sole_max_height_fraction * h)),
-                       y_bottom};
+                       std::max(1, static_cast<int>(p.field_line_sole_max_height_fraction * h)), y_bottom};
   const auto onFieldLine = [&](const Hit& hit) {
     if (!markings.covers(camera, {scan_x[hit.column] + 0.5, hit.row + 0.5})) return false;
-    return p.field_line_sole_max_gray_ratio <= 0 ||
-           belowDarkPanel(image, scan_x[hit.column], hit.row, sole) == hit.row;
+    return !sole_seen || belowDarkPanel(image, scan_x[hit.column], hit.row, sole) == hit.row;
   };
   for (int c = 0; c < columns; ++c) {
     first_hit.push_back(static_cast<int>(hits.size()));

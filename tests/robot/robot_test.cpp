@@ -2054,7 +2054,8 @@ TEST(LinesGenerator, ADetectedFieldLineInFrontOfTheFeetIsNoSilhouette) {
 // A robot standing on a field line: the feet's near edge lies over the line, a dark sole right
 // below it and the line's white below that. Dropping every edge on the detected line drops the
 // feet's too (the silhouette there is gone); the sole's thin dark stripe under an edge tells it is
-// the feet's, and it stays: the block's near edge is the first line.
+// the feet's, and it stays: the block's near edge is the first line (on a robot box tall enough
+// for a sole to show).
 TEST(LinesGenerator, AFeetEdgeOverADetectedFieldLineWithASoleBelowStays) {
   const CameraModel cam = testCamera();
   const Eigen::Vector2d centre(1.2, 0.0);
@@ -2095,9 +2096,16 @@ TEST(LinesGenerator, AFeetEdgeOverADetectedFieldLineWithASoleBelowStays) {
   const LineHypothesis& first = kept.regions[0].line_in_robot;
   EXPECT_GT(std::abs(first.direction().y()), std::cos(5 * std::numbers::pi / 180));
   EXPECT_NEAR((first.a + first.b).x() / 2, near_x, 0.03);
-  params.field_line_sole_max_gray_ratio = 0;
-  const RobotLines dropped = untrainedEstimator(params).findLines(img.view(), cam, robot, field);
-  EXPECT_LT(std::count_if(dropped.silhouette_px.begin(), dropped.silhouette_px.end(), onNearEdge), 0.2 * (right - left));
+  ASSERT_GE(robot.box.height(), params.field_line_sole_min_box_height_px);
+  // Off, or on a robot box too small for its sole to show: the edge goes with the line.
+  RobotOrientationParams off = params, small = params;
+  off.field_line_sole_max_gray_ratio = 0;
+  small.field_line_sole_min_box_height_px = robot.box.height() + 1;
+  for (const RobotOrientationParams& q : {off, small}) {
+    const RobotLines dropped = untrainedEstimator(q).findLines(img.view(), cam, robot, field);
+    EXPECT_LT(std::count_if(dropped.silhouette_px.begin(), dropped.silhouette_px.end(), onNearEdge),
+              0.2 * (right - left));
+  }
 }
 
 // OriNet looks at each region as it is and mirrored, the mirrored look's side classes swapped: a

@@ -98,11 +98,13 @@ struct RobotOrientationParams {
   double field_line_margin_px = 2;
   double field_line_min_length_m = 0.5;
   double field_line_min_angle_deg = 30;
-  /// ... but an edge there with a thin stretch right below it darker than
-  /// field_line_sole_max_gray_ratio × the carpet's gray (at most field_line_sole_max_height_fraction
-  /// of the box height tall, then lighter again) is a sole's upper edge over the marking, the feet's:
-  /// it stays (0: every edge on the marking is dropped)
+  /// ... but on a robot box at least field_line_sole_min_box_height_px tall, an edge there with a
+  /// thin stretch right below it darker than field_line_sole_max_gray_ratio × the carpet's gray (at
+  /// most field_line_sole_max_height_fraction of the box height tall, then lighter again) is a
+  /// sole's upper edge over the marking, the feet's: it stays (0: every edge on the marking is
+  /// dropped). A smaller robot's sole is under a pixel: any contact shadow passes for it.
   double field_line_sole_max_gray_ratio = 0.7;
+  double field_line_sole_min_box_height_px = 120;
   double field_line_sole_max_height_fraction = 0.02;
   double region_margin_fraction = 0.25;      ///< region: line width grown by this at both ends
   double region_above_fraction = 0.35;       ///< region height above the line, in robot heights
